@@ -1,0 +1,50 @@
+// The BRDF file contract (DESIGN.md section 3): Disney BRDF Explorer's .brdf text format.
+#pragma once
+
+#include <array>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "brdfa/result.h"
+
+namespace brdfa {
+
+using Vec3 = std::array<float, 3>;
+
+enum class ParamType { Float, Color, Bool };
+const char* paramTypeName(ParamType type);
+
+// One line of the `::begin parameters` section.
+struct BrdfParam {
+  std::string name;
+  ParamType type = ParamType::Float;
+  float min = 0.0f;         // Float only; Color is 0..1, Bool is 0|1
+  float max = 1.0f;
+  Vec3 defaultValue{0, 0, 0};  // Float and Bool use [0]
+  int line = 0;             // 1-based line in the file
+};
+
+enum class BrdfFormat { Explorer, Legacy };
+
+// A parsed .brdf file. The GLSL sections are kept verbatim together with the file line on
+// which they start, so diagnostics can be mapped back to the submitted text.
+struct BrdfDefinition {
+  BrdfFormat format = BrdfFormat::Explorer;
+  std::vector<BrdfParam> params;
+  std::string shader;          // body of `::begin shader` (defines vec3 BRDF(L, V, N, X, Y))
+  int shaderFirstLine = 0;     // file line of the first line of `shader`
+  std::string sampleShader;    // body of `::begin sample`, empty when absent
+  int sampleFirstLine = 0;
+  std::vector<Diagnostic> warnings;  // e.g. an ignored `isFunc` section
+
+  const BrdfParam* findParam(std::string_view name) const;
+  bool hasSampler() const { return !sampleShader.empty(); }
+};
+
+// Parses the text of a .brdf file. Never throws. A malformed parameter line yields a
+// CompileError whose diagnostic carries that line. Checks that the shader section exists and
+// that parameter names are GLSL identifiers, unique, and not reserved by the integrator.
+Result<BrdfDefinition> parseBrdf(std::string_view text);
+
+}  // namespace brdfa

@@ -1,0 +1,99 @@
+// The renderer library's entry point. No HTTP and no Vulkan types in this header: the server
+// links against it, and it could later live in a separate worker process.
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "brdfa/brdf.h"
+#include "brdfa/result.h"
+#include "brdfa/scene.h"
+
+namespace brdfa {
+
+struct RendererOptions {
+  std::string deviceName;  // substring of the device name to pick; empty = prefer a real GPU
+  std::string shaderDir;   // directory holding shaders/lib and shaders/kernels
+  bool validation = false; // enable VK_LAYER_KHRONOS_validation when present
+};
+
+struct DeviceInfo {
+  std::string name;        // e.g. "llvmpipe (LLVM 15.0.6, 256 bits)"
+  std::string type;        // "cpu" | "gpu"
+  std::string driver;      // driver name and version string
+  std::string apiVersion;  // e.g. "1.3.230"
+};
+
+struct CompileInfo {
+  std::vector<Diagnostic> warnings;
+  double compileMs = 0;  // glslang time (0 when served from the SPIR-V cache)
+  bool cached = false;
+};
+
+// Progress of one RenderView's accumulation.
+struct FrameStats {
+  uint64_t spp = 0;           // samples per pixel accumulated since the last scene change
+  uint64_t passes = 0;        // progressive passes since the last scene change
+  double elapsedMs = 0;       // render time spent since the last scene change
+  double lastPassMs = 0;      // wall time of the latest pass
+  uint64_t nanSamples = 0;    // NaN/Inf samples dropped since the last scene change
+  std::optional<double> relError;  // relative RMS error from the two half accumulators
+  uint64_t vertices = 0;
+  uint64_t triangles = 0;
+  bool converged = false;     // spp reached render.max_samples
+  uint64_t sceneVersion = 0;  // increments on every accepted setScene
+};
+
+// A resolved frame read back from the device.
+struct Frame {
+  int width = 0;
+  int height = 0;
+  std::vector<uint8_t> rgba8;  // tone-mapped sRGB (exposure applied), row 0 at the top
+  std::vector<float> rgba32f;  // linear radiance, row 0 at the top; filled only when asked
+  FrameStats stats;
+};
+
+// One progressive render target with its own scene and accumulators (a session, or a one-shot
+// render). All methods are thread-safe: calls on one view are serialized by the view.
+class RenderView {
+ public:
+  virtual ~RenderView() = default;
+
+  // Applies a scene. Compiles the BRDFs it needs (served from the cache when seen before),
+  // uploads what changed and restarts accumulation when anything changed. A change of parameter
+  // values only never recompiles. On error the previous scene stays in place.
+  virtual Result<void> setScene(const Scene& scene) = 0;
+
+  // Renders one progressive pass of render.samples_per_frame samples per pixel (fewer when
+  // max_samples is near). Does nothing once converged.
+  virtual Result<FrameStats> renderPass() = 0;
+
+  virtual FrameStats stats() const = 0;
+
+  // Resolves the accumulators into an image; `linear` also returns float radiance.
+  virtual Result<Frame> readFrame(bool linear) = 0;
+};
+
+class Renderer {
+ public:
+  virtual ~Renderer() = default;
+
+  // Opens the Vulkan device: options.deviceName when given, else a discrete or integrated GPU
+  // when one exists, else a CPU device (lavapipe).
+  static Result<std::shared_ptr<Renderer>> create(const RendererOptions& options);
+
+  virtual const DeviceInfo& device() const = 0;
+
+  // Compiles the BRDF's shading kernel without rendering (validation). Thread-safe.
+  virtual Result<CompileInfo> compileBrdf(const BrdfDefinition& brdf) = 0;
+
+  virtual Result<std::unique_ptr<RenderView>> createView() = 0;
+
+  virtual std::vector<std::string> environmentNames() const = 0;
+  virtual std::vector<std::string> meshNames() const = 0;
+};
+
+}  // namespace brdfa

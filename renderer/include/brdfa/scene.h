@@ -1,0 +1,66 @@
+// The scene a RenderView draws: the resolved form of DESIGN.md's scene JSON.
+// Names (mesh, environment) are resolved by the renderer; BRDFs arrive already parsed.
+#pragma once
+
+#include <map>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "brdfa/brdf.h"
+
+namespace brdfa {
+
+struct Camera {
+  Vec3 position{0, 0, 3};
+  float yaw = 0;     // degrees, about +Y; 0 looks down -Z
+  float pitch = 0;   // degrees, about the camera's X axis; positive looks up
+  float fov = 45;    // vertical field of view, degrees
+};
+
+struct EnvironmentSettings {
+  std::string name = "furnace";
+  float intensity = 1.0f;
+  float rotation = 0.0f;  // degrees about +Y
+  bool visible = true;    // drawn as the background
+};
+
+// How the integrator draws directions. Both are unbiased: f * L * cos / pdf.
+enum class SamplingMode { Cosine, Uniform };
+const char* samplingModeName(SamplingMode mode);
+
+struct RenderSettings {
+  int width = 512;
+  int height = 512;
+  int samplesPerFrame = 4;
+  int maxSamples = 4096;
+  SamplingMode sampling = SamplingMode::Cosine;
+  float exposure = 0.0f;  // stops; PNG = sRGB(clamp(L * 2^exposure))
+};
+
+struct SceneObject {
+  std::string mesh = "sphere";
+  std::shared_ptr<const BrdfDefinition> brdf;  // required
+  std::string brdfName;                         // for reports only
+  std::map<std::string, Vec3> params;           // missing names take the file's defaults
+  Vec3 translate{0, 0, 0};
+  Vec3 rotate{0, 0, 0};  // degrees, applied X then Y then Z
+  Vec3 scale{1, 1, 1};
+};
+
+struct Scene {
+  Camera camera;
+  EnvironmentSettings environment;
+  std::vector<SceneObject> objects;
+  RenderSettings render;
+};
+
+// Limits the renderer enforces in RenderView::setScene (the server checks them earlier too,
+// to name the JSON field).
+inline constexpr int kMinImageSize = 16;
+inline constexpr int kMaxImageSize = 4096;
+inline constexpr int kMaxSamplesPerFrame = 1024;
+inline constexpr int kMaxTotalSamples = 1 << 20;
+inline constexpr int kMaxObjects = 64;
+
+}  // namespace brdfa
