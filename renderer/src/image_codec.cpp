@@ -1,0 +1,157 @@
+// PNG (stb_image_write with zlib level 1 and the Sub filter) and PFM encoders.
+#include "brdfa/image_codec.h"
+
+#include <zlib.h>
+
+#include <cstdlib>
+#include <cstring>
+#include <string>
+
+namespace {
+
+// stb's own deflate is slow; zlib at level 1 is several times faster for live frames. stb frees
+// the returned buffer with STBIW_FREE (free), so it must come from malloc.
+unsigned char* brdfaZlibCompress(unsigned char* data, int dataLen, int* outLen, int /*quality*/) {
+  if (!data || dataLen < 0 || !outLen) return nullptr;
+  uLongf bound = compressBound(static_cast<uLong>(dataLen));
+  auto* out = static_cast<unsigned char*>(std::malloc(bound));
+  if (!out) return nullptr;
+  if (compress2(out, &bound, data, static_cast<uLong>(dataLen), 1) != Z_OK) {
+    std::free(out);
+    return nullptr;
+  }
+  *outLen = static_cast<int>(bound);
+  return out;
+}
+
+}  // namespace
+
+#define STBIW_ZLIB_COMPRESS brdfaZlibCompress
+#define STB_IMAGE_WRITE_IMPLEMENTATION
+#define STB_IMAGE_WRITE_STATIC
+#if defined(__GNUC__)
+#pragma GCC diagnostic push
+#pragma GCC diagnostic ignored "-Wmissing-field-initializers"
+#pragma GCC diagnostic ignored "-Wunused-function"
+#pragma GCC diagnostic ignored "-Wunused-parameter"
+#endif
+#include <stb_image_write.h>
+#if defined(__GNUC__)
+#pragma GCC diagnostic pop
+#endif
+
+namespace brdfa {
+
+namespace {
+
+// stbi_write_force_png_filter is a global read by every encode. It is set once here, during
+// static initialisation and before any thread can encode, and never written again.
+const bool kForcedSubFilter = [] {
+  stbi_write_force_png_filter = 1;  // PNG filter type 1 = Sub
+  return true;
+}();
+
+void appendToVector(void* context, void* data, int size) {
+  auto* out = static_cast<std::vector<uint8_t>*>(context);
+  const auto* bytes = static_cast<const uint8_t*>(data);
+  out->insert(out->end(), bytes, bytes + size);
+}
+
+void appendFloatLE(std::vector<uint8_t>& out, float v) {
+  uint32_t bits;
+  std::memcpy(&bits, &v, sizeof bits);
+  for (int i = 0; i < 4; ++i) out.push_back(static_cast<uint8_t>(bits >> (8 * i)));
+}
+
+float readFloat(const uint8_t* p, bool littleEndian) {
+  uint32_t bits = 0;
+  for (int i = 0; i < 4; ++i) {
+    const uint32_t byte = p[littleEndian ? i : 3 - i];
+    bits |= byte << (8 * i);
+  }
+  float v;
+  std::memcpy(&v, &bits, sizeof v);
+  return v;
+}
+
+// Reads one whitespace-delimited token of the PFM header; `pos` ends on the delimiter.
+bool readToken(const std::vector<uint8_t>& b, size_t& pos, std::string& token) {
+  auto space = [](uint8_t c) { return c == ' ' || c == '\t' || c == '\n' || c == '\r'; };
+  while (pos < b.size() && space(b[pos])) ++pos;
+  token.clear();
+  while (pos < b.size() && !space(b[pos]) && token.size() < 64) token.push_back(char(b[pos++]));
+  return !token.empty() && pos < b.size();
+}
+
+bool parseInt(const std::string& s, int& out) {
+  char* end = nullptr;
+  const long v = std::strtol(s.c_str(), &end, 10);
+  if (end != s.c_str() + s.size() || v <= 0 || v > (1 << 20)) return false;
+  out = static_cast<int>(v);
+  return true;
+}
+
+}  // namespace
+
+std::vector<uint8_t> encodePng(const uint8_t* rgba8, int width, int height) {
+  (void)kForcedSubFilter;
+  std::vector<uint8_t> out;
+  if (!rgba8 || width <= 0 || height <= 0) return out;
+  if (!stbi_write_png_to_func(appendToVector, &out, width, height, 4, rgba8, width * 4))
+    out.clear();
+  return out;
+}
+
+std::vector<uint8_t> encodePfm(const float* rgba32f, int width, int height) {
+  std::vector<uint8_t> out;
+  if (!rgba32f || width <= 0 || height <= 0) return out;
+  const std::string header =
+      "PF\n" + std::to_string(width) + " " + std::to_string(height) + "\n-1.0\n";
+  out.reserve(header.size() + size_t(width) * height * 12);
+  out.insert(out.end(), header.begin(), header.end());
+  // PFM rows run bottom to top.
+  for (int y = height - 1; y >= 0; --y) {
+    const float* row = rgba32f + size_t(y) * width * 4;
+    for (int x = 0; x < width; ++x)
+      for (int c = 0; c < 3; ++c) appendFloatLE(out, row[x * 4 + c]);
+  }
+  return out;
+}
+
+bool decodePfm(const std::vector<uint8_t>& bytes, int& width, int& height,
+               std::vector<float>& rgba32f) {
+  size_t pos = 0;
+  std::string magic, w, h, scale;
+  if (!readToken(bytes, pos, magic) || (magic != "PF" && magic != "Pf")) return false;
+  if (!readToken(bytes, pos, w) || !readToken(bytes, pos, h) || !readToken(bytes, pos, scale))
+    return false;
+  int wi = 0, hi = 0;
+  if (!parseInt(w, wi) || !parseInt(h, hi)) return false;
+  char* end = nullptr;
+  const double s = std::strtod(scale.c_str(), &end);
+  if (end != scale.c_str() + scale.size() || s == 0.0) return false;
+  ++pos;  // exactly one whitespace byte separates the header from the raster
+
+  const int channels = magic == "PF" ? 3 : 1;
+  const size_t count = size_t(wi) * hi * channels;
+  if (bytes.size() < pos || bytes.size() - pos < count * 4) return false;
+  const bool littleEndian = s < 0;  // the sign of the scale gives the byte order
+
+  rgba32f.assign(size_t(wi) * hi * 4, 1.0f);
+  const uint8_t* p = bytes.data() + pos;
+  for (int fileRow = 0; fileRow < hi; ++fileRow) {
+    float* dst = rgba32f.data() + size_t(hi - 1 - fileRow) * wi * 4;
+    for (int x = 0; x < wi; ++x) {
+      for (int c = 0; c < 3; ++c) {
+        const int src = channels == 3 ? c : 0;
+        dst[x * 4 + c] = readFloat(p + (size_t(x) * channels + src) * 4, littleEndian);
+      }
+    }
+    p += size_t(wi) * channels * 4;
+  }
+  width = wi;
+  height = hi;
+  return true;
+}
+
+}  // namespace brdfa
