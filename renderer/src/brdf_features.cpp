@@ -1,0 +1,77 @@
+#include "brdf_features.h"
+
+#include <cctype>
+#include <map>
+#include <string>
+#include <string_view>
+#include <vector>
+
+namespace brdfa {
+
+namespace {
+
+bool identChar(char c) { return std::isalnum(static_cast<unsigned char>(c)) || c == '_'; }
+
+// Whole-word occurrences of `word` in `text`.
+int countWord(std::string_view text, std::string_view word) {
+  int n = 0;
+  for (size_t at = text.find(word); at != std::string_view::npos; at = text.find(word, at + 1)) {
+    bool startOk = at == 0 || !identChar(text[at - 1]);
+    bool endOk = at + word.size() >= text.size() || !identChar(text[at + word.size()]);
+    if (startOk && endOk) ++n;
+  }
+  return n;
+}
+
+// Names of the parameters of the first definition of `function` in `text`, e.g. BRDF(vec3 L,
+// vec3 V, ...) -> {L, V, ...}. Empty when not found.
+std::vector<std::string> parameterNames(std::string_view text, std::string_view function) {
+  for (size_t at = text.find(function); at != std::string_view::npos; at = text.find(function, at + 1)) {
+    if (at > 0 && identChar(text[at - 1])) continue;
+    size_t open = at + function.size();
+    while (open < text.size() && std::isspace(static_cast<unsigned char>(text[open]))) ++open;
+    if (open >= text.size() || text[open] != '(') continue;
+    size_t close = text.find(')', open);
+    if (close == std::string_view::npos) return {};
+    std::vector<std::string> names;
+    std::string_view params = text.substr(open + 1, close - open - 1);
+    size_t start = 0;
+    while (start <= params.size()) {
+      size_t comma = params.find(',', start);
+      std::string_view p = params.substr(start, comma == std::string_view::npos ? std::string_view::npos : comma - start);
+      size_t end = p.size();
+      while (end > 0 && !identChar(p[end - 1])) --end;
+      size_t begin = end;
+      while (begin > 0 && identChar(p[begin - 1])) --begin;
+      names.emplace_back(p.substr(begin, end - begin));
+      if (comma == std::string_view::npos) break;
+      start = comma + 1;
+    }
+    return names;
+  }
+  return {};
+}
+
+}  // namespace
+
+BrdfFeatures detectFeatures(const BrdfDefinition& brdf) {
+  BrdfFeatures f;
+  const std::string code = brdf.shader + "\n" + brdf.sampleShader;
+  // name -> number of signatures declaring it. X, Y are parameters 4 and 5 of both
+  // BRDF(L, V, N, X, Y) and sampleBRDF(u, V, N, X, Y, out L, out pdf).
+  std::map<std::string, int> declared;
+  for (const char* fn : {"BRDF", "sampleBRDF"}) {
+    std::vector<std::string> names = parameterNames(code, fn);
+    if (names.empty()) continue;
+    if (names.size() < 5 || names[3].empty() || names[4].empty()) return f;  // unexpected: assume used
+    ++declared[names[3]];
+    ++declared[names[4]];
+  }
+  if (declared.empty()) return f;
+  f.tangentFrame = false;
+  for (const auto& [name, signatures] : declared)
+    if (countWord(code, name) > signatures) f.tangentFrame = true;  // read beyond its declarations
+  return f;
+}
+
+}  // namespace brdfa

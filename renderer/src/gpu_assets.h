@@ -1,0 +1,70 @@
+// Device-side forms of meshes, environments and compiled kernels, shared between views.
+#pragma once
+
+#include <vulkan/vulkan.h>
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "program_assembler.h"
+#include "vk_resources.h"
+
+namespace brdfa {
+
+struct GpuMesh {
+  std::string name;
+  Buffer vertices;
+  Buffer indices;
+  uint32_t vertexCount = 0;
+  uint32_t indexCount = 0;
+};
+
+struct GpuEnvironment {
+  std::string name;
+  bool constant = false;
+  Image cube;  // RGBA16F, SHADER_READ_ONLY_OPTIMAL
+};
+
+// A compute pipeline that owns its VkPipeline.
+class ComputeKernel {
+ public:
+  ComputeKernel(VkDevice device, VkPipeline pipeline) : device_(device), pipeline_(pipeline) {}
+  ~ComputeKernel() { if (pipeline_) vkDestroyPipeline(device_, pipeline_, nullptr); }
+  ComputeKernel(const ComputeKernel&) = delete;
+  ComputeKernel& operator=(const ComputeKernel&) = delete;
+  VkPipeline pipeline() const { return pipeline_; }
+
+ private:
+  VkDevice device_;
+  VkPipeline pipeline_;
+};
+
+// The integrator specialized to one BRDF and one variant (sampling mode, environment kind).
+struct ShadeKernel {
+  std::unique_ptr<ComputeKernel> kernel;
+  ParamBlockLayout params;
+  uint64_t programHash = 0;  // hash of the assembled source: identifies the compiled program
+};
+
+// Push constants of every compute kernel; mirrors BrdfaPush in shaders/lib/bindings.glsl.
+struct ComputePush {
+  float cameraPos[4];
+  float cameraRight[4];
+  float cameraUp[4];
+  float cameraForward[4];
+  float env[4];
+  uint32_t frame[4];
+  uint32_t target[4];
+  float tone[4];
+};
+static_assert(sizeof(ComputePush) == 128, "push constants must fit the 128-byte minimum");
+
+// Per-object uniform of the raster pass; mirrors BrdfaObject in gbuffer.vert.glsl.
+struct ObjectUniform {
+  float model[16];
+  float normalMatrix[16];
+  float id[4];
+};
+
+}  // namespace brdfa

@@ -1,0 +1,499 @@
+#include "render_view.h"
+
+#include <glm/gtc/type_ptr.hpp>
+
+#include <chrono>
+#include <cmath>
+#include <cstring>
+
+#include "scene_check.h"
+#include "scene_math.h"
+#include "vk_check.h"
+
+namespace brdfa {
+
+namespace {
+
+constexpr uint32_t kShadeGroup = 8;     // local size of shade/background kernels
+constexpr uint32_t kResolveGroup = 16;  // local size of the resolve kernel
+constexpr double kErrorRefreshMs = 200; // rel_error is refreshed at least this often while rendering
+
+uint32_t groups(uint32_t n, uint32_t size) { return (n + size - 1) / size; }
+
+double msSince(std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+}
+
+bool sameVec(const Vec3& a, const Vec3& b) { return a == b; }
+
+bool sameGeometry(const Scene& a, const Scene& b) {
+  const Camera &ca = a.camera, &cb = b.camera;
+  if (!sameVec(ca.position, cb.position) || ca.yaw != cb.yaw || ca.pitch != cb.pitch || ca.fov != cb.fov) return false;
+  if (a.objects.size() != b.objects.size()) return false;
+  for (size_t i = 0; i < a.objects.size(); ++i) {
+    const SceneObject &oa = a.objects[i], &ob = b.objects[i];
+    if (oa.mesh != ob.mesh || !sameVec(oa.translate, ob.translate) || !sameVec(oa.rotate, ob.rotate) ||
+        !sameVec(oa.scale, ob.scale))
+      return false;
+  }
+  return true;
+}
+
+bool sameLighting(const Scene& a, const Scene& b) {
+  const EnvironmentSettings &ea = a.environment, &eb = b.environment;
+  return ea.name == eb.name && ea.intensity == eb.intensity && ea.rotation == eb.rotation &&
+         ea.visible == eb.visible && a.render.sampling == b.render.sampling;
+}
+
+}  // namespace
+
+RenderViewImpl::RenderViewImpl(std::shared_ptr<RendererImpl> renderer) : r_(std::move(renderer)) {}
+
+RenderViewImpl::~RenderViewImpl() {
+  VkDevice d = r_->ctx().device();
+  releaseObjects(objects_);
+  if (framebuffer_) vkDestroyFramebuffer(d, framebuffer_, nullptr);
+  if (pool_) vkDestroyDescriptorPool(d, pool_, nullptr);
+}
+
+Result<void> RenderViewImpl::init() {
+  VkContext& ctx = r_->ctx();
+  auto cmd = CommandContext::create(ctx);
+  if (!cmd) return cmd.takeError();
+  cmd_ = std::move(cmd.value());
+
+  // New objects are built before the old ones are released, hence room for two scenes' worth.
+  VkDescriptorPoolSize sizes[3] = {{VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 6},
+                                   {VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, 1},
+                                   {VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, 4 * kMaxObjects}};
+  VkDescriptorPoolCreateInfo pci{VK_STRUCTURE_TYPE_DESCRIPTOR_POOL_CREATE_INFO};
+  pci.flags = VK_DESCRIPTOR_POOL_CREATE_FREE_DESCRIPTOR_SET_BIT;
+  pci.maxSets = 1 + 2 * kMaxObjects;
+  pci.poolSizeCount = 3;
+  pci.pPoolSizes = sizes;
+  BRDFA_VK_TRY(vkCreateDescriptorPool(ctx.device(), &pci, nullptr, &pool_));
+  VkDescriptorSetLayout layout = r_->viewSetLayout();
+  VkDescriptorSetAllocateInfo ai{VK_STRUCTURE_TYPE_DESCRIPTOR_SET_ALLOCATE_INFO};
+  ai.descriptorPool = pool_;
+  ai.descriptorSetCount = 1;
+  ai.pSetLayouts = &layout;
+  BRDFA_VK_TRY(vkAllocateDescriptorSets(ctx.device(), &ai, &viewSet_));
+
+  auto counters = Buffer::create(ctx, 16, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT, true);
+  if (!counters) return counters.takeError();
+  counters_ = std::move(counters.value());
+  return {};
+}
+
+// Shaders below SPIR-V 1.6 run with gl_SubgroupSize equal to the device's subgroupSize property
+// (no varying sizes), so each workgroup writes exactly this many partial sums.
+size_t RenderViewImpl::partialCount(uint32_t width, uint32_t height) const {
+  const uint32_t perGroup = (kResolveGroup * kResolveGroup + r_->ctx().subgroupSize() - 1) / r_->ctx().subgroupSize();
+  return size_t(groups(width, kResolveGroup)) * groups(height, kResolveGroup) * perGroup;
+}
+
+Result<void> RenderViewImpl::resize(uint32_t width, uint32_t height) {
+  VkContext& ctx = r_->ctx();
+  VkDevice d = ctx.device();
+  if (framebuffer_) vkDestroyFramebuffer(d, framebuffer_, nullptr);
+  framebuffer_ = VK_NULL_HANDLE;
+  width_ = height_ = 0;
+
+  ImageSpec g;
+  g.width = width;
+  g.height = height;
+  g.format = VK_FORMAT_R32G32B32A32_SFLOAT;
+  g.usage = VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | VK_IMAGE_USAGE_TRANSFER_SRC_BIT;
+  for (Image* img : {&gPosition_, &gNormal_, &gTangent_}) {
+    auto created = Image::create(ctx, g);
+    if (!created) return created.takeError();
+    *img = std::move(created.value());
+  }
+  ImageSpec dspec = g;
+  dspec.format = VK_FORMAT_D32_SFLOAT;
+  dspec.usage = VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT;
+  dspec.aspect = VK_IMAGE_ASPECT_DEPTH_BIT;
+  auto depth = Image::create(ctx, dspec);
+  if (!depth) return depth.takeError();
+  depth_ = std::move(depth.value());
+
+  VkImageView views[4] = {gPosition_.view(), gNormal_.view(), gTangent_.view(), depth_.view()};
+  VkFramebufferCreateInfo fci{VK_STRUCTURE_TYPE_FRAMEBUFFER_CREATE_INFO};
+  fci.renderPass = r_->gbufferPass();
+  fci.attachmentCount = 4;
+  fci.pAttachments = views;
+  fci.width = width;
+  fci.height = height;
+  fci.layers = 1;
+  BRDFA_VK_TRY(vkCreateFramebuffer(d, &fci, nullptr, &framebuffer_));
+
+  const VkDeviceSize pixels = VkDeviceSize(width) * height;
+  const VkBufferUsageFlags storage = VK_BUFFER_USAGE_STORAGE_BUFFER_BIT;
+  struct Want { Buffer* buffer; VkDeviceSize size; VkBufferUsageFlags usage; bool host; };
+  const Want wants[5] = {
+      {&gbuffer_, pixels * 3 * 16, storage | VK_BUFFER_USAGE_TRANSFER_DST_BIT, false},
+      {&accum_, pixels * 2 * 16, storage | VK_BUFFER_USAGE_TRANSFER_DST_BIT, false},
+      {&outRgba8_, pixels * 4, storage, true},
+      {&outFloat_, pixels * 16, storage, true},
+      {&partials_, VkDeviceSize(partialCount(width, height)) * 16, storage, true}};
+  for (const Want& w : wants) {
+    auto b = Buffer::create(ctx, w.size, w.usage, w.host);
+    if (!b) return b.takeError();
+    *w.buffer = std::move(b.value());
+  }
+  width_ = width;
+  height_ = height;
+  return {};
+}
+
+void RenderViewImpl::writeViewDescriptors() {
+  VkDescriptorImageInfo env{r_->environmentSampler(), env_->cube.view(), VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL};
+  const std::pair<uint32_t, const Buffer*> buffers[6] = {{0, &gbuffer_},  {3, &accum_},    {4, &counters_},
+                                                         {6, &outRgba8_}, {7, &outFloat_}, {8, &partials_}};
+  VkDescriptorBufferInfo infos[6];
+  VkWriteDescriptorSet w[7] = {};
+  for (uint32_t i = 0; i < 7; ++i) {
+    w[i].sType = VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET;
+    w[i].dstSet = viewSet_;
+    w[i].descriptorCount = 1;
+  }
+  for (uint32_t i = 0; i < 6; ++i) {
+    infos[i] = {buffers[i].second->handle(), 0, VK_WHOLE_SIZE};
+    w[i].dstBinding = buffers[i].first;
+    w[i].descriptorType = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER;
+    w[i].pBufferInfo = &infos[i];
+  }
+  w[6].dstBinding = 5;
+  w[6].descriptorType = VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER;
+  w[6].pImageInfo = &env;
+  vkUpdateDescriptorSets(r_->ctx().device(), 7, w, 0, nullptr);
+}
+
+void RenderViewImpl::releaseObjects(std::vector<ObjectState>& objects) {
+  for (ObjectState& o : objects)
+    if (o.set) vkFreeDescriptorSets(r_->ctx().device(), pool_, 1, &o.set);
+  objects.clear();
+}
+
+Result<std::vector<RenderViewImpl::ObjectState>> RenderViewImpl::buildObjects(const Scene& scene) {
+  VkContext& ctx = r_->ctx();
+  const bool constantEnv = env_ && env_->constant;
+  std::vector<ObjectState> out;
+  auto fail = [&](Error e) -> Result<std::vector<ObjectState>> {
+    releaseObjects(out);
+    return e;
+  };
+  for (size_t i = 0; i < scene.objects.size(); ++i) {
+    const SceneObject& so = scene.objects[i];
+    const std::string at = "objects[" + std::to_string(i) + "]";
+    ObjectState o;
+    auto kernel = r_->shadeKernel(*so.brdf, scene.render.sampling, constantEnv);
+    if (!kernel) {
+      Error e = kernel.takeError();
+      if (e.field.empty()) e.field = at + ".brdf";
+      return fail(std::move(e));
+    }
+    o.kernel = kernel.value();
+    auto mesh = r_->mesh(so.mesh);
+    if (!mesh) {
+      Error e = mesh.takeError();
+      e.field = at + ".mesh";
+      return fail(std::move(e));
+    }
+    o.mesh = mesh.value();
+
+    std::vector<uint8_t> packed = o.kernel->params.pack(*so.brdf, so.params);
+    auto params = Buffer::create(ctx, packed.size(), VK_BUFFER_USAGE_UNIFORM_BUFFER_BIT, true);
+    if (!params) return fail(params.takeError());
+    std::memcpy(params->mapped(), packed.data(), packed.size());
+    o.params = std::move(params.value());
+
+    ObjectUniform u{};
+    glm::mat4 model = modelMatrix(so);
+    glm::mat4 normal = glm::transpose(glm::inverse(model));
+    std::memcpy(u.model, glm::value_ptr(model), sizeof(u.model));
+    std::memcpy(u.normalMatrix, glm::value_ptr(normal), sizeof(u.normalMatrix));
+    u.id[0] = static_cast<float>(i + 1);
+    auto transform = Buffer::create(ctx, sizeof(u), VK_BUFFER_USAGE_UNIFORM_BUFFER_BIT, true);
+    if (!transform) return fail(transform.takeError());
+    std::memcpy(transform->mapped(), &u, sizeof(u));
+    o.transform = std::move(transform.value());
+
+    VkDescriptorSetLayout layout = r_->objectSetLayout();
+    VkDescriptorSetAllocateInfo ai{VK_STRUCTURE_TYPE_DESCRIPTOR_SET_ALLOCATE_INFO};
+    ai.descriptorPool = pool_;
+    ai.descriptorSetCount = 1;
+    ai.pSetLayouts = &layout;
+    VkResult vr = vkAllocateDescriptorSets(ctx.device(), &ai, &o.set);
+    if (vr != VK_SUCCESS) return fail(vkError(vr, "vkAllocateDescriptorSets"));
+    VkDescriptorBufferInfo infos[2] = {{o.params.handle(), 0, VK_WHOLE_SIZE}, {o.transform.handle(), 0, VK_WHOLE_SIZE}};
+    VkWriteDescriptorSet w[2] = {};
+    for (uint32_t b = 0; b < 2; ++b) {
+      w[b].sType = VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET;
+      w[b].dstSet = o.set;
+      w[b].dstBinding = b;
+      w[b].descriptorCount = 1;
+      w[b].descriptorType = VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER;
+      w[b].pBufferInfo = &infos[b];
+    }
+    vkUpdateDescriptorSets(ctx.device(), 2, w, 0, nullptr);
+    out.push_back(std::move(o));
+  }
+  return out;
+}
+
+Result<void> RenderViewImpl::setScene(const Scene& scene) {
+  BRDFA_TRY(checkScene(scene));
+  std::lock_guard<std::mutex> lock(mutex_);
+  auto env = r_->environment(scene.environment.name);
+  if (!env) {
+    Error e = env.takeError();
+    e.field = "environment.name";
+    return e;
+  }
+  auto previousEnv = env_;
+  env_ = env.value();  // buildObjects specializes kernels to the environment kind
+  auto built = buildObjects(scene);
+  if (!built) {
+    env_ = previousEnv;
+    return built.takeError();
+  }
+  std::vector<ObjectState> objects = std::move(built.value());
+
+  const auto width = static_cast<uint32_t>(scene.render.width);
+  const auto height = static_cast<uint32_t>(scene.render.height);
+  const bool resized = !hasScene_ || width != width_ || height != height_;
+  if (resized) {
+    auto r = resize(width, height);
+    if (!r) {
+      releaseObjects(objects);
+      hasScene_ = false;  // size-dependent resources are gone; the next setScene rebuilds them
+      return r.takeError();
+    }
+  }
+  if (resized || previousEnv != env_) writeViewDescriptors();
+
+  bool sameShading = hasScene_ && !resized && sameLighting(scene_, scene) && objects.size() == objects_.size();
+  for (size_t i = 0; sameShading && i < objects.size(); ++i) {
+    sameShading = objects[i].kernel->programHash == objects_[i].kernel->programHash &&
+                  objects[i].params.size() == objects_[i].params.size() &&
+                  std::memcmp(objects[i].params.mapped(), objects_[i].params.mapped(), objects[i].params.size()) == 0;
+  }
+  const bool geometryChanged = resized || !hasScene_ || !sameGeometry(scene_, scene);
+  const bool restart = geometryChanged || !sameShading;
+  const bool displayChanged = !hasScene_ || scene.render.exposure != scene_.render.exposure ||
+                              scene.render.samplesPerFrame != scene_.render.samplesPerFrame ||
+                              scene.render.maxSamples != scene_.render.maxSamples;
+
+  releaseObjects(objects_);
+  objects_ = std::move(objects);
+  scene_ = scene;
+  hasScene_ = true;
+  if (geometryChanged) gbufferPending_ = true;
+  if (restart) {
+    clearPending_ = true;
+    const uint64_t version = stats_.sceneVersion;
+    stats_ = FrameStats{};
+    stats_.sceneVersion = version;
+    sinceErrorMs_ = 0;
+  }
+  if (restart || displayChanged) ++stats_.sceneVersion;
+  stats_.vertices = stats_.triangles = 0;
+  for (const ObjectState& o : objects_) {
+    stats_.vertices += o.mesh->vertexCount;
+    stats_.triangles += o.mesh->indexCount / 3;
+  }
+  stats_.converged = stats_.spp >= static_cast<uint64_t>(scene_.render.maxSamples);
+  return {};
+}
+
+ComputePush RenderViewImpl::basePush() const {
+  ComputePush p{};
+  CameraFrame cam = cameraFrame(scene_.camera, width_, height_);
+  auto put = [](float* dst, const glm::vec3& v) { dst[0] = v.x; dst[1] = v.y; dst[2] = v.z; dst[3] = 0; };
+  put(p.cameraPos, cam.position);
+  put(p.cameraRight, cam.right * (cam.tanHalfFov * cam.aspect));
+  put(p.cameraUp, cam.up * cam.tanHalfFov);
+  put(p.cameraForward, cam.forward);
+  float rot = glm::radians(scene_.environment.rotation);
+  p.env[0] = scene_.environment.intensity;
+  p.env[1] = std::cos(rot);
+  p.env[2] = std::sin(rot);
+  p.frame[0] = width_;
+  p.frame[1] = height_;
+  p.tone[0] = std::exp2(scene_.render.exposure);
+  return p;
+}
+
+void RenderViewImpl::recordPending(VkCommandBuffer cb) {
+  if (gbufferPending_) {
+    VkClearValue clears[4] = {};
+    clears[3].depthStencil = {1.0f, 0};
+    VkRenderPassBeginInfo rbi{VK_STRUCTURE_TYPE_RENDER_PASS_BEGIN_INFO};
+    rbi.renderPass = r_->gbufferPass();
+    rbi.framebuffer = framebuffer_;
+    rbi.renderArea = {{0, 0}, {width_, height_}};
+    rbi.clearValueCount = 4;
+    rbi.pClearValues = clears;
+    vkCmdBeginRenderPass(cb, &rbi, VK_SUBPASS_CONTENTS_INLINE);
+    VkViewport vp{0, 0, static_cast<float>(width_), static_cast<float>(height_), 0, 1};
+    VkRect2D scissor{{0, 0}, {width_, height_}};
+    vkCmdSetViewport(cb, 0, 1, &vp);
+    vkCmdSetScissor(cb, 0, 1, &scissor);
+    vkCmdBindPipeline(cb, VK_PIPELINE_BIND_POINT_GRAPHICS, r_->gbufferPipeline());
+    glm::mat4 viewProj = cameraFrame(scene_.camera, width_, height_).viewProj;
+    vkCmdPushConstants(cb, r_->rasterLayout(), VK_SHADER_STAGE_VERTEX_BIT, 0, 64, glm::value_ptr(viewProj));
+    for (const ObjectState& o : objects_) {
+      vkCmdBindDescriptorSets(cb, VK_PIPELINE_BIND_POINT_GRAPHICS, r_->rasterLayout(), 1, 1, &o.set, 0, nullptr);
+      VkBuffer vb = o.mesh->vertices.handle();
+      VkDeviceSize offset = 0;
+      vkCmdBindVertexBuffers(cb, 0, 1, &vb, &offset);
+      vkCmdBindIndexBuffer(cb, o.mesh->indices.handle(), 0, VK_INDEX_TYPE_UINT32);
+      vkCmdDrawIndexed(cb, o.mesh->indexCount, 1, 0, 0, 0);
+    }
+    vkCmdEndRenderPass(cb);
+    // Copy the targets into the three planes of the G-buffer storage buffer.
+    const VkDeviceSize plane = VkDeviceSize(width_) * height_ * 16;
+    const Image* targets[3] = {&gPosition_, &gNormal_, &gTangent_};
+    for (int i = 0; i < 3; ++i) {
+      VkBufferImageCopy region{};
+      region.bufferOffset = plane * i;
+      region.imageSubresource = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 0, 1};
+      region.imageExtent = {width_, height_, 1};
+      vkCmdCopyImageToBuffer(cb, targets[i]->handle(), VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL, gbuffer_.handle(), 1, &region);
+    }
+  }
+  if (clearPending_) {
+    vkCmdFillBuffer(cb, accum_.handle(), 0, VK_WHOLE_SIZE, 0);
+    vkCmdFillBuffer(cb, counters_.handle(), 0, VK_WHOLE_SIZE, 0);
+  }
+  if (gbufferPending_ || clearPending_)
+    memoryBarrier(cb, VK_PIPELINE_STAGE_TRANSFER_BIT, VK_ACCESS_TRANSFER_WRITE_BIT,
+                  VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_ACCESS_SHADER_READ_BIT | VK_ACCESS_SHADER_WRITE_BIT);
+  if (clearPending_ && scene_.environment.visible) {
+    // The background is deterministic: written once per restart, not every pass.
+    ComputePush push = basePush();
+    vkCmdBindPipeline(cb, VK_PIPELINE_BIND_POINT_COMPUTE, r_->backgroundPipeline(env_->constant));
+    vkCmdBindDescriptorSets(cb, VK_PIPELINE_BIND_POINT_COMPUTE, r_->computeLayout(), 0, 1, &viewSet_, 0, nullptr);
+    vkCmdPushConstants(cb, r_->computeLayout(), VK_SHADER_STAGE_COMPUTE_BIT, 0, sizeof(push), &push);
+    vkCmdDispatch(cb, groups(width_, kShadeGroup), groups(height_, kShadeGroup), 1);
+    memoryBarrier(cb, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_ACCESS_SHADER_WRITE_BIT,
+                  VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_ACCESS_SHADER_READ_BIT | VK_ACCESS_SHADER_WRITE_BIT);
+  }
+}
+
+void RenderViewImpl::recordResolve(VkCommandBuffer cb, bool linear) {
+  ComputePush push = basePush();
+  push.target[2] = linear ? 1u : 0u;
+  vkCmdBindPipeline(cb, VK_PIPELINE_BIND_POINT_COMPUTE, r_->resolvePipeline());
+  vkCmdBindDescriptorSets(cb, VK_PIPELINE_BIND_POINT_COMPUTE, r_->computeLayout(), 0, 1, &viewSet_, 0, nullptr);
+  vkCmdPushConstants(cb, r_->computeLayout(), VK_SHADER_STAGE_COMPUTE_BIT, 0, sizeof(push), &push);
+  vkCmdDispatch(cb, groups(width_, kResolveGroup), groups(height_, kResolveGroup), 1);
+}
+
+void RenderViewImpl::updateRelError() {
+  const auto* partials = static_cast<const float*>(partials_.mapped());
+  const size_t n = partialCount(width_, height_);
+  double variance = 0, luminance = 0, pixels = 0;
+  for (size_t i = 0; i < n; ++i) {
+    variance += partials[4 * i + 0];
+    luminance += partials[4 * i + 1];
+    pixels += partials[4 * i + 2];
+  }
+  if (pixels > 0 && luminance > 0)
+    stats_.relError = std::sqrt(variance / pixels) / (luminance / pixels);
+  else
+    stats_.relError.reset();
+  sinceErrorMs_ = 0;
+}
+
+Result<FrameStats> RenderViewImpl::renderPass() {
+  std::lock_guard<std::mutex> lock(mutex_);
+  if (!hasScene_) return makeError(ErrorCode::InvalidArgument, "no scene has been set");
+  const uint64_t maxSamples = static_cast<uint64_t>(scene_.render.maxSamples);
+  if (stats_.spp >= maxSamples) {
+    stats_.converged = true;
+    return stats_;
+  }
+  const auto t0 = std::chrono::steady_clock::now();
+  const uint32_t count = static_cast<uint32_t>(
+      std::min<uint64_t>(static_cast<uint64_t>(scene_.render.samplesPerFrame), maxSamples - stats_.spp));
+  auto begun = cmd_.begin();
+  if (!begun) return begun.takeError();
+  VkCommandBuffer cb = *begun;
+  recordPending(cb);
+
+  ComputePush push = basePush();
+  push.frame[2] = static_cast<uint32_t>(stats_.spp);  // the sequence continues across passes
+  push.frame[3] = count;
+  push.target[1] = static_cast<uint32_t>(stats_.passes & 1u);  // alternate half accumulators
+  const uint32_t gx = groups(width_, kShadeGroup), gy = groups(height_, kShadeGroup);
+  const VkPipelineLayout layout = r_->computeLayout();
+  vkCmdBindDescriptorSets(cb, VK_PIPELINE_BIND_POINT_COMPUTE, layout, 0, 1, &viewSet_, 0, nullptr);
+  // Objects cover disjoint pixels, so their dispatches need no barrier between them.
+  for (size_t i = 0; i < objects_.size(); ++i) {
+    push.target[0] = static_cast<uint32_t>(i + 1);
+    vkCmdBindPipeline(cb, VK_PIPELINE_BIND_POINT_COMPUTE, objects_[i].kernel->kernel->pipeline());
+    vkCmdBindDescriptorSets(cb, VK_PIPELINE_BIND_POINT_COMPUTE, layout, 1, 1, &objects_[i].set, 0, nullptr);
+    vkCmdPushConstants(cb, layout, VK_SHADER_STAGE_COMPUTE_BIT, 0, sizeof(push), &push);
+    vkCmdDispatch(cb, gx, gy, 1);
+  }
+  // Refresh the error estimate in the same submission when it is due (and a second half exists).
+  const bool refreshError = stats_.passes >= 1 &&
+                            (sinceErrorMs_ >= kErrorRefreshMs || stats_.spp + count >= maxSamples);
+  if (refreshError) {
+    memoryBarrier(cb, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_ACCESS_SHADER_WRITE_BIT,
+                  VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_ACCESS_SHADER_READ_BIT);
+    recordResolve(cb, false);
+  }
+  memoryBarrier(cb, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_ACCESS_SHADER_WRITE_BIT,
+                VK_PIPELINE_STAGE_HOST_BIT, VK_ACCESS_HOST_READ_BIT);
+  BRDFA_TRY(cmd_.submitAndWait());
+  gbufferPending_ = clearPending_ = false;
+
+  const double ms = msSince(t0);
+  stats_.spp += count;
+  stats_.passes += 1;
+  stats_.elapsedMs += ms;
+  stats_.lastPassMs = ms;
+  stats_.nanSamples = *static_cast<const uint32_t*>(counters_.mapped());
+  stats_.converged = stats_.spp >= maxSamples;
+  sinceErrorMs_ += ms;
+  if (refreshError) updateRelError();
+  return stats_;
+}
+
+FrameStats RenderViewImpl::stats() const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  return stats_;
+}
+
+Result<Frame> RenderViewImpl::readFrame(bool linear) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  if (!hasScene_) return makeError(ErrorCode::InvalidArgument, "no scene has been set");
+  auto begun = cmd_.begin();
+  if (!begun) return begun.takeError();
+  VkCommandBuffer cb = *begun;
+  recordPending(cb);
+  recordResolve(cb, linear);
+  memoryBarrier(cb, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_ACCESS_SHADER_WRITE_BIT,
+                VK_PIPELINE_STAGE_HOST_BIT, VK_ACCESS_HOST_READ_BIT);
+  BRDFA_TRY(cmd_.submitAndWait());
+  gbufferPending_ = clearPending_ = false;
+  if (stats_.passes >= 2) updateRelError();
+
+  Frame frame;
+  frame.width = static_cast<int>(width_);
+  frame.height = static_cast<int>(height_);
+  const size_t pixels = size_t(width_) * height_;
+  const auto* rgba8 = static_cast<const uint8_t*>(outRgba8_.mapped());
+  frame.rgba8.assign(rgba8, rgba8 + pixels * 4);
+  if (linear) {
+    const auto* f = static_cast<const float*>(outFloat_.mapped());
+    frame.rgba32f.assign(f, f + pixels * 4);
+  }
+  frame.stats = stats_;
+  return frame;
+}
+
+}  // namespace brdfa

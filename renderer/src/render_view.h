@@ -1,0 +1,68 @@
+// One progressive render target: G-buffer, half accumulators, outputs, per-object state.
+#pragma once
+
+#include <memory>
+#include <mutex>
+#include <vector>
+
+#include "brdfa/renderer.h"
+#include "gpu_assets.h"
+#include "renderer_impl.h"
+
+namespace brdfa {
+
+class RenderViewImpl final : public RenderView {
+ public:
+  explicit RenderViewImpl(std::shared_ptr<RendererImpl> renderer);
+  ~RenderViewImpl() override;
+
+  Result<void> init();
+
+  Result<void> setScene(const Scene& scene) override;
+  Result<FrameStats> renderPass() override;
+  FrameStats stats() const override;
+  Result<Frame> readFrame(bool linear) override;
+
+ private:
+  struct ObjectState {
+    std::shared_ptr<const ShadeKernel> kernel;
+    std::shared_ptr<const GpuMesh> mesh;
+    Buffer params;     // std140 BrdfParams
+    Buffer transform;  // ObjectUniform
+    VkDescriptorSet set = VK_NULL_HANDLE;
+  };
+
+  Result<void> resize(uint32_t width, uint32_t height);
+  void writeViewDescriptors();
+  Result<std::vector<ObjectState>> buildObjects(const Scene& scene);
+  void releaseObjects(std::vector<ObjectState>& objects);
+  // Records what a scene change left pending: the raster pass and G-buffer copy; clearing the
+  // accumulators and writing the background.
+  void recordPending(VkCommandBuffer cb);
+  void recordResolve(VkCommandBuffer cb, bool linear);
+  void updateRelError();
+  // Entries of the error partial-sum buffer: one per subgroup of each resolve workgroup.
+  size_t partialCount(uint32_t width, uint32_t height) const;
+  ComputePush basePush() const;
+
+  std::shared_ptr<RendererImpl> r_;
+  mutable std::mutex mutex_;
+  CommandContext cmd_;
+  VkDescriptorPool pool_ = VK_NULL_HANDLE;
+  VkDescriptorSet viewSet_ = VK_NULL_HANDLE;
+  VkFramebuffer framebuffer_ = VK_NULL_HANDLE;
+  Image gPosition_, gNormal_, gTangent_, depth_;
+  Buffer gbuffer_, accum_, counters_, outRgba8_, outFloat_, partials_;
+  uint32_t width_ = 0, height_ = 0;
+
+  bool hasScene_ = false;
+  Scene scene_;
+  std::shared_ptr<const GpuEnvironment> env_;
+  std::vector<ObjectState> objects_;
+  bool gbufferPending_ = true;
+  bool clearPending_ = true;
+  double sinceErrorMs_ = 0;  // pass time since rel_error was last refreshed
+  FrameStats stats_;
+};
+
+}  // namespace brdfa

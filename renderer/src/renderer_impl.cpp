@@ -1,0 +1,428 @@
+#include "renderer_impl.h"
+
+#include <array>
+#include <cstring>
+
+#include "brdf_features.h"
+#include "environment_maps.h"
+#include "meshes.h"
+#include "render_view.h"
+#include "vk_check.h"
+
+namespace brdfa {
+
+namespace {
+constexpr size_t kMaxCachedPrograms = 256;
+constexpr VkFormat kGbufferFormat = VK_FORMAT_R32G32B32A32_SFLOAT;
+constexpr VkFormat kDepthFormat = VK_FORMAT_D32_SFLOAT;
+
+template <class Map>
+void evictOldest(Map& map, std::deque<uint64_t>& order) {
+  while (order.size() > kMaxCachedPrograms) {
+    map.erase(order.front());
+    order.pop_front();
+  }
+}
+}  // namespace
+
+Result<std::shared_ptr<Renderer>> Renderer::create(const RendererOptions& options) {
+  auto r = RendererImpl::create(options);
+  if (!r) return r.takeError();
+  return std::shared_ptr<Renderer>(std::move(r.value()));
+}
+
+Result<std::shared_ptr<RendererImpl>> RendererImpl::create(const RendererOptions& options) {
+  std::shared_ptr<RendererImpl> r(new RendererImpl());
+  BRDFA_TRY(r->init(options));
+  return r;
+}
+
+Result<void> RendererImpl::init(const RendererOptions& options) {
+  auto sources = ShaderSources::load(options.shaderDir);
+  if (!sources) return sources.takeError();
+  sources_ = std::move(sources.value());
+  auto ctx = VkContext::create(options);
+  if (!ctx) return ctx.takeError();
+  ctx_ = std::move(ctx.value());
+  BRDFA_TRY(createLayouts());
+  BRDFA_TRY(createGbufferPipeline());
+
+  auto resolve = compileFixedKernel({}, {"lib/bindings.glsl", "lib/tonemap.glsl", "kernels/resolve.comp.glsl"},
+                                    {"GL_KHR_shader_subgroup_arithmetic"});
+  if (!resolve) return resolve.takeError();
+  resolve_ = std::move(resolve.value());
+  for (bool constant : {true, false}) {
+    auto bg = compileFixedKernel({constant ? "BRDFA_ENV_CONSTANT" : "BRDFA_ENV_CUBEMAP"},
+                                 {"lib/bindings.glsl", "lib/environment.glsl", "kernels/background.comp.glsl"});
+    if (!bg) return bg.takeError();
+    (constant ? backgroundConstant_ : backgroundCube_) = std::move(bg.value());
+  }
+
+  VkSamplerCreateInfo sci{VK_STRUCTURE_TYPE_SAMPLER_CREATE_INFO};
+  sci.magFilter = VK_FILTER_LINEAR;
+  sci.minFilter = VK_FILTER_LINEAR;
+  sci.mipmapMode = VK_SAMPLER_MIPMAP_MODE_NEAREST;
+  sci.addressModeU = sci.addressModeV = sci.addressModeW = VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_EDGE;
+  sci.maxLod = 0.0f;
+  BRDFA_VK_TRY(vkCreateSampler(ctx_->device(), &sci, nullptr, &envSampler_));
+  return {};
+}
+
+RendererImpl::~RendererImpl() {
+  if (!ctx_) return;
+  VkDevice d = ctx_->device();
+  vkDeviceWaitIdle(d);
+  kernelCache_.clear();
+  environments_.clear();
+  meshes_.clear();
+  resolve_.reset();
+  backgroundConstant_.reset();
+  backgroundCube_.reset();
+  if (envSampler_) vkDestroySampler(d, envSampler_, nullptr);
+  if (gbufferPipeline_) vkDestroyPipeline(d, gbufferPipeline_, nullptr);
+  if (gbufferPass_) vkDestroyRenderPass(d, gbufferPass_, nullptr);
+  if (computeLayout_) vkDestroyPipelineLayout(d, computeLayout_, nullptr);
+  if (rasterLayout_) vkDestroyPipelineLayout(d, rasterLayout_, nullptr);
+  if (viewSetLayout_) vkDestroyDescriptorSetLayout(d, viewSetLayout_, nullptr);
+  if (objectSetLayout_) vkDestroyDescriptorSetLayout(d, objectSetLayout_, nullptr);
+}
+
+Result<void> RendererImpl::createLayouts() {
+  VkDevice d = ctx_->device();
+  // Set 0: one view's G-buffer, accumulators, counters, environment and outputs
+  // (bindings as in shaders/lib/bindings.glsl).
+  const std::array<std::pair<uint32_t, VkDescriptorType>, 7> viewBindings = {{
+      {0, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER},  {3, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER},
+      {4, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER},  {5, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER},
+      {6, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER},  {7, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER},
+      {8, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER}}};
+  std::array<VkDescriptorSetLayoutBinding, 7> view{};
+  for (size_t i = 0; i < view.size(); ++i)
+    view[i] = {viewBindings[i].first, viewBindings[i].second, 1, VK_SHADER_STAGE_COMPUTE_BIT, nullptr};
+  VkDescriptorSetLayoutCreateInfo li{VK_STRUCTURE_TYPE_DESCRIPTOR_SET_LAYOUT_CREATE_INFO};
+  li.bindingCount = static_cast<uint32_t>(view.size());
+  li.pBindings = view.data();
+  BRDFA_VK_TRY(vkCreateDescriptorSetLayout(d, &li, nullptr, &viewSetLayout_));
+
+  // Set 1: one object's BRDF parameters (shading) and transform (raster).
+  std::array<VkDescriptorSetLayoutBinding, 2> object{};
+  object[0] = {0, VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, 1, VK_SHADER_STAGE_COMPUTE_BIT, nullptr};
+  object[1] = {1, VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, 1, VK_SHADER_STAGE_VERTEX_BIT | VK_SHADER_STAGE_FRAGMENT_BIT, nullptr};
+  li.bindingCount = static_cast<uint32_t>(object.size());
+  li.pBindings = object.data();
+  BRDFA_VK_TRY(vkCreateDescriptorSetLayout(d, &li, nullptr, &objectSetLayout_));
+
+  VkDescriptorSetLayout sets[2] = {viewSetLayout_, objectSetLayout_};
+  VkPushConstantRange computePush{VK_SHADER_STAGE_COMPUTE_BIT, 0, sizeof(ComputePush)};
+  VkPipelineLayoutCreateInfo pli{VK_STRUCTURE_TYPE_PIPELINE_LAYOUT_CREATE_INFO};
+  pli.setLayoutCount = 2;
+  pli.pSetLayouts = sets;
+  pli.pushConstantRangeCount = 1;
+  pli.pPushConstantRanges = &computePush;
+  BRDFA_VK_TRY(vkCreatePipelineLayout(d, &pli, nullptr, &computeLayout_));
+
+  VkPushConstantRange rasterPush{VK_SHADER_STAGE_VERTEX_BIT, 0, 64};  // mat4 viewProj
+  pli.pPushConstantRanges = &rasterPush;
+  BRDFA_VK_TRY(vkCreatePipelineLayout(d, &pli, nullptr, &rasterLayout_));
+
+  // G-buffer render pass: three float targets + depth; the targets end ready to be copied into
+  // the G-buffer storage buffer the kernels read.
+  std::array<VkAttachmentDescription, 4> att{};
+  for (int i = 0; i < 4; ++i) {
+    att[i].format = i < 3 ? kGbufferFormat : kDepthFormat;
+    att[i].samples = VK_SAMPLE_COUNT_1_BIT;
+    att[i].loadOp = VK_ATTACHMENT_LOAD_OP_CLEAR;
+    att[i].storeOp = i < 3 ? VK_ATTACHMENT_STORE_OP_STORE : VK_ATTACHMENT_STORE_OP_DONT_CARE;
+    att[i].stencilLoadOp = VK_ATTACHMENT_LOAD_OP_DONT_CARE;
+    att[i].stencilStoreOp = VK_ATTACHMENT_STORE_OP_DONT_CARE;
+    att[i].initialLayout = VK_IMAGE_LAYOUT_UNDEFINED;
+    att[i].finalLayout = i < 3 ? VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL : VK_IMAGE_LAYOUT_DEPTH_STENCIL_ATTACHMENT_OPTIMAL;
+  }
+  VkAttachmentReference colors[3] = {{0, VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL},
+                                     {1, VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL},
+                                     {2, VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL}};
+  VkAttachmentReference depth{3, VK_IMAGE_LAYOUT_DEPTH_STENCIL_ATTACHMENT_OPTIMAL};
+  VkSubpassDescription sub{};
+  sub.pipelineBindPoint = VK_PIPELINE_BIND_POINT_GRAPHICS;
+  sub.colorAttachmentCount = 3;
+  sub.pColorAttachments = colors;
+  sub.pDepthStencilAttachment = &depth;
+  std::array<VkSubpassDependency, 2> deps{};
+  // Earlier copies out of the targets finish before they are cleared and rewritten.
+  deps[0] = {VK_SUBPASS_EXTERNAL, 0, VK_PIPELINE_STAGE_TRANSFER_BIT,
+             VK_PIPELINE_STAGE_COLOR_ATTACHMENT_OUTPUT_BIT | VK_PIPELINE_STAGE_EARLY_FRAGMENT_TESTS_BIT, 0,
+             VK_ACCESS_COLOR_ATTACHMENT_WRITE_BIT | VK_ACCESS_DEPTH_STENCIL_ATTACHMENT_WRITE_BIT, 0};
+  // The written targets are visible to the copy into the G-buffer storage buffer.
+  deps[1] = {0, VK_SUBPASS_EXTERNAL, VK_PIPELINE_STAGE_COLOR_ATTACHMENT_OUTPUT_BIT,
+             VK_PIPELINE_STAGE_TRANSFER_BIT, VK_ACCESS_COLOR_ATTACHMENT_WRITE_BIT,
+             VK_ACCESS_TRANSFER_READ_BIT, 0};
+  VkRenderPassCreateInfo rpi{VK_STRUCTURE_TYPE_RENDER_PASS_CREATE_INFO};
+  rpi.attachmentCount = static_cast<uint32_t>(att.size());
+  rpi.pAttachments = att.data();
+  rpi.subpassCount = 1;
+  rpi.pSubpasses = &sub;
+  rpi.dependencyCount = static_cast<uint32_t>(deps.size());
+  rpi.pDependencies = deps.data();
+  BRDFA_VK_TRY(vkCreateRenderPass(d, &rpi, nullptr, &gbufferPass_));
+  return {};
+}
+
+Result<void> RendererImpl::createGbufferPipeline() {
+  VkDevice d = ctx_->device();
+  auto vs = spirv(ShaderStage::Vertex, sources_.assembleFixed({}, {"kernels/gbuffer.vert.glsl"}), nullptr);
+  if (!vs) return vs.takeError();
+  auto fs = spirv(ShaderStage::Fragment, sources_.assembleFixed({}, {"kernels/gbuffer.frag.glsl"}), nullptr);
+  if (!fs) return fs.takeError();
+  VkShaderModule modules[2] = {};
+  const std::vector<uint32_t>* code[2] = {&(*vs)->words, &(*fs)->words};
+  for (int i = 0; i < 2; ++i) {
+    VkShaderModuleCreateInfo mci{VK_STRUCTURE_TYPE_SHADER_MODULE_CREATE_INFO};
+    mci.codeSize = code[i]->size() * 4;
+    mci.pCode = code[i]->data();
+    VkResult r = vkCreateShaderModule(d, &mci, nullptr, &modules[i]);
+    if (r != VK_SUCCESS) {
+      if (modules[0]) vkDestroyShaderModule(d, modules[0], nullptr);
+      return vkError(r, "vkCreateShaderModule");
+    }
+  }
+  VkPipelineShaderStageCreateInfo stages[2] = {};
+  for (int i = 0; i < 2; ++i) {
+    stages[i].sType = VK_STRUCTURE_TYPE_PIPELINE_SHADER_STAGE_CREATE_INFO;
+    stages[i].stage = i == 0 ? VK_SHADER_STAGE_VERTEX_BIT : VK_SHADER_STAGE_FRAGMENT_BIT;
+    stages[i].module = modules[i];
+    stages[i].pName = "main";
+  }
+  VkVertexInputBindingDescription binding{0, sizeof(Vertex), VK_VERTEX_INPUT_RATE_VERTEX};
+  VkVertexInputAttributeDescription attrs[4] = {
+      {0, 0, VK_FORMAT_R32G32B32_SFLOAT, offsetof(Vertex, position)},
+      {1, 0, VK_FORMAT_R32G32B32_SFLOAT, offsetof(Vertex, normal)},
+      {2, 0, VK_FORMAT_R32G32_SFLOAT, offsetof(Vertex, texCoord)},
+      {3, 0, VK_FORMAT_R32G32B32A32_SFLOAT, offsetof(Vertex, tangent)}};
+  VkPipelineVertexInputStateCreateInfo vi{VK_STRUCTURE_TYPE_PIPELINE_VERTEX_INPUT_STATE_CREATE_INFO};
+  vi.vertexBindingDescriptionCount = 1;
+  vi.pVertexBindingDescriptions = &binding;
+  vi.vertexAttributeDescriptionCount = 4;
+  vi.pVertexAttributeDescriptions = attrs;
+  VkPipelineInputAssemblyStateCreateInfo ia{VK_STRUCTURE_TYPE_PIPELINE_INPUT_ASSEMBLY_STATE_CREATE_INFO};
+  ia.topology = VK_PRIMITIVE_TOPOLOGY_TRIANGLE_LIST;
+  VkPipelineViewportStateCreateInfo vp{VK_STRUCTURE_TYPE_PIPELINE_VIEWPORT_STATE_CREATE_INFO};
+  vp.viewportCount = 1;
+  vp.scissorCount = 1;
+  VkPipelineRasterizationStateCreateInfo rs{VK_STRUCTURE_TYPE_PIPELINE_RASTERIZATION_STATE_CREATE_INFO};
+  rs.polygonMode = VK_POLYGON_MODE_FILL;
+  rs.cullMode = VK_CULL_MODE_NONE;  // two-sided: open meshes are seen from both sides
+  // Meshes wind counter-clockwise seen from outside; the projection flips Y so the image is
+  // upright, which keeps that winding counter-clockwise on screen.
+  rs.frontFace = VK_FRONT_FACE_COUNTER_CLOCKWISE;
+  rs.lineWidth = 1.0f;
+  VkPipelineMultisampleStateCreateInfo ms{VK_STRUCTURE_TYPE_PIPELINE_MULTISAMPLE_STATE_CREATE_INFO};
+  ms.rasterizationSamples = VK_SAMPLE_COUNT_1_BIT;
+  VkPipelineDepthStencilStateCreateInfo ds{VK_STRUCTURE_TYPE_PIPELINE_DEPTH_STENCIL_STATE_CREATE_INFO};
+  ds.depthTestEnable = VK_TRUE;
+  ds.depthWriteEnable = VK_TRUE;
+  ds.depthCompareOp = VK_COMPARE_OP_LESS;
+  VkPipelineColorBlendAttachmentState blend[3] = {};
+  for (auto& b : blend) b.colorWriteMask = 0xF;
+  VkPipelineColorBlendStateCreateInfo cb{VK_STRUCTURE_TYPE_PIPELINE_COLOR_BLEND_STATE_CREATE_INFO};
+  cb.attachmentCount = 3;
+  cb.pAttachments = blend;
+  VkDynamicState dyn[2] = {VK_DYNAMIC_STATE_VIEWPORT, VK_DYNAMIC_STATE_SCISSOR};
+  VkPipelineDynamicStateCreateInfo dy{VK_STRUCTURE_TYPE_PIPELINE_DYNAMIC_STATE_CREATE_INFO};
+  dy.dynamicStateCount = 2;
+  dy.pDynamicStates = dyn;
+  VkGraphicsPipelineCreateInfo gpi{VK_STRUCTURE_TYPE_GRAPHICS_PIPELINE_CREATE_INFO};
+  gpi.stageCount = 2;
+  gpi.pStages = stages;
+  gpi.pVertexInputState = &vi;
+  gpi.pInputAssemblyState = &ia;
+  gpi.pViewportState = &vp;
+  gpi.pRasterizationState = &rs;
+  gpi.pMultisampleState = &ms;
+  gpi.pDepthStencilState = &ds;
+  gpi.pColorBlendState = &cb;
+  gpi.pDynamicState = &dy;
+  gpi.layout = rasterLayout_;
+  gpi.renderPass = gbufferPass_;
+  VkResult r = vkCreateGraphicsPipelines(d, VK_NULL_HANDLE, 1, &gpi, nullptr, &gbufferPipeline_);
+  for (VkShaderModule m : modules) vkDestroyShaderModule(d, m, nullptr);
+  if (r != VK_SUCCESS) return vkError(r, "vkCreateGraphicsPipelines");
+  return {};
+}
+
+Result<std::unique_ptr<ComputeKernel>> RendererImpl::createComputeKernel(const std::vector<uint32_t>& code) {
+  VkDevice d = ctx_->device();
+  VkShaderModuleCreateInfo mci{VK_STRUCTURE_TYPE_SHADER_MODULE_CREATE_INFO};
+  mci.codeSize = code.size() * 4;
+  mci.pCode = code.data();
+  VkShaderModule module;
+  BRDFA_VK_TRY(vkCreateShaderModule(d, &mci, nullptr, &module));
+  VkComputePipelineCreateInfo cpi{VK_STRUCTURE_TYPE_COMPUTE_PIPELINE_CREATE_INFO};
+  cpi.stage.sType = VK_STRUCTURE_TYPE_PIPELINE_SHADER_STAGE_CREATE_INFO;
+  cpi.stage.stage = VK_SHADER_STAGE_COMPUTE_BIT;
+  cpi.stage.module = module;
+  cpi.stage.pName = "main";
+  cpi.layout = computeLayout_;
+  VkPipeline pipeline;
+  VkResult r = vkCreateComputePipelines(d, VK_NULL_HANDLE, 1, &cpi, nullptr, &pipeline);
+  vkDestroyShaderModule(d, module, nullptr);
+  if (r != VK_SUCCESS) return vkError(r, "vkCreateComputePipelines");
+  return std::make_unique<ComputeKernel>(d, pipeline);
+}
+
+Result<std::unique_ptr<ComputeKernel>> RendererImpl::compileFixedKernel(const std::vector<std::string>& defines,
+                                                                        const std::vector<std::string>& pieces,
+                                                                        const std::vector<std::string>& extensions) {
+  for (const auto& p : pieces)
+    if (sources_.get(p).empty()) return makeError(ErrorCode::NotFound, "shader source missing: " + p);
+  auto code = spirv(ShaderStage::Compute, sources_.assembleFixed(defines, pieces, extensions), nullptr);
+  if (!code) return code.takeError();
+  return createComputeKernel((*code)->words);
+}
+
+Result<std::shared_ptr<const SpirvBinary>> RendererImpl::spirv(ShaderStage stage, const std::string& source,
+                                                               bool* cached) {
+  static const std::string compiler = compilerVersion();
+  uint64_t key = fnv1a64(source, fnv1a64(compiler) ^ static_cast<uint64_t>(stage));
+  {
+    std::lock_guard<std::mutex> lock(spirvMutex_);
+    auto it = spirvCache_.find(key);
+    if (it != spirvCache_.end()) {
+      if (cached) *cached = true;
+      return it->second;
+    }
+  }
+  auto compiled = compileGlsl(stage, source);
+  if (!compiled) return compiled.takeError();
+  auto shared = std::make_shared<const SpirvBinary>(std::move(compiled.value()));
+  std::lock_guard<std::mutex> lock(spirvMutex_);
+  if (spirvCache_.emplace(key, shared).second) spirvOrder_.push_back(key);
+  evictOldest(spirvCache_, spirvOrder_);
+  if (cached) *cached = false;
+  return shared;
+}
+
+AssembledProgram RendererImpl::assembleShadeProgram(const BrdfDefinition& brdf, SamplingMode sampling,
+                                                    bool constantEnv) const {
+  ProgramSpec spec;
+  spec.brdf = &brdf;
+  spec.defines = {sampling == SamplingMode::Uniform ? "BRDFA_SAMPLING_UNIFORM" : "BRDFA_SAMPLING_COSINE",
+                  constantEnv ? "BRDFA_ENV_CONSTANT" : "BRDFA_ENV_CUBEMAP"};
+  if (detectFeatures(brdf).tangentFrame) spec.defines.push_back("BRDFA_TANGENT_FRAME");
+  for (const char* piece : {"lib/bindings.glsl", "lib/random.glsl", "lib/frame.glsl", "lib/sampling.glsl",
+                            "lib/environment.glsl", "lib/brdf_inputs.glsl"})
+    spec.commonChunks.push_back(sources_.get(piece));
+  spec.integrator = sources_.get("kernels/shade.comp.glsl");
+  return assembleProgram(spec);
+}
+
+Result<CompileInfo> RendererImpl::compileBrdf(const BrdfDefinition& brdf) {
+  if (brdf.format == BrdfFormat::Legacy)
+    return makeError(ErrorCode::Unsupported, "legacy render() BRDFs are not supported yet");
+  AssembledProgram program = assembleShadeProgram(brdf, SamplingMode::Cosine, false);
+  CompileInfo info;
+  auto code = spirv(ShaderStage::Compute, program.source, &info.cached);
+  if (!code) return code.takeError();
+  info.warnings = brdf.warnings;
+  info.warnings.insert(info.warnings.end(), (*code)->warnings.begin(), (*code)->warnings.end());
+  info.compileMs = info.cached ? 0.0 : (*code)->compileMs;
+  return info;
+}
+
+Result<std::shared_ptr<const ShadeKernel>> RendererImpl::shadeKernel(const BrdfDefinition& brdf,
+                                                                     SamplingMode sampling, bool constantEnv) {
+  if (brdf.format == BrdfFormat::Legacy)
+    return makeError(ErrorCode::Unsupported, "legacy render() BRDFs are not supported yet");
+  AssembledProgram program = assembleShadeProgram(brdf, sampling, constantEnv);
+  // Held across creation so concurrent requests for one program JIT it once.
+  std::lock_guard<std::mutex> lock(kernelMutex_);
+  auto it = kernelCache_.find(program.hash);
+  if (it != kernelCache_.end()) return it->second;
+  auto code = spirv(ShaderStage::Compute, program.source, nullptr);
+  if (!code) return code.takeError();
+  auto kernel = createComputeKernel((*code)->words);
+  if (!kernel) return kernel.takeError();
+  auto shade = std::make_shared<ShadeKernel>();
+  shade->kernel = std::move(kernel.value());
+  shade->params = program.params;
+  shade->programHash = program.hash;
+  kernelCache_.emplace(program.hash, shade);
+  kernelOrder_.push_back(program.hash);
+  evictOldest(kernelCache_, kernelOrder_);
+  return std::shared_ptr<const ShadeKernel>(shade);
+}
+
+Result<std::shared_ptr<const GpuEnvironment>> RendererImpl::environment(const std::string& name) {
+  std::lock_guard<std::mutex> lock(assetMutex_);
+  auto it = environments_.find(name);
+  if (it != environments_.end()) return it->second;
+  auto data = makeBuiltinEnvironment(name);
+  if (!data) return data.takeError();
+  ImageSpec spec;
+  spec.width = spec.height = data->faceSize;
+  spec.layers = 6;
+  spec.cube = true;
+  spec.format = VK_FORMAT_R16G16B16A16_SFLOAT;  // linear filtering is guaranteed for 16F, not 32F
+  spec.usage = VK_IMAGE_USAGE_SAMPLED_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT;
+  auto image = Image::create(*ctx_, spec);
+  if (!image) return image.takeError();
+  BRDFA_TRY(uploadImage(*ctx_, *image, data->texels.data(), data->texels.size() * sizeof(uint16_t)));
+  auto env = std::make_shared<GpuEnvironment>();
+  env->name = name;
+  env->constant = data->constant;
+  env->cube = std::move(image.value());
+  environments_[name] = env;
+  return std::shared_ptr<const GpuEnvironment>(env);
+}
+
+namespace {
+Result<Buffer> deviceBufferWith(VkContext& ctx, const void* bytes, VkDeviceSize size, VkBufferUsageFlags usage) {
+  auto staging = Buffer::create(ctx, size, VK_BUFFER_USAGE_TRANSFER_SRC_BIT, true);
+  if (!staging) return staging.takeError();
+  std::memcpy(staging->mapped(), bytes, size);
+  auto buffer = Buffer::create(ctx, size, usage | VK_BUFFER_USAGE_TRANSFER_DST_BIT, false);
+  if (!buffer) return buffer.takeError();
+  auto cmd = CommandContext::create(ctx);
+  if (!cmd) return cmd.takeError();
+  auto cb = cmd->begin();
+  if (!cb) return cb.takeError();
+  VkBufferCopy region{0, 0, size};
+  vkCmdCopyBuffer(*cb, staging->handle(), buffer->handle(), 1, &region);
+  memoryBarrier(*cb, VK_PIPELINE_STAGE_TRANSFER_BIT, VK_ACCESS_TRANSFER_WRITE_BIT,
+                VK_PIPELINE_STAGE_VERTEX_INPUT_BIT, VK_ACCESS_VERTEX_ATTRIBUTE_READ_BIT | VK_ACCESS_INDEX_READ_BIT);
+  BRDFA_TRY(cmd->submitAndWait());
+  return buffer;
+}
+}  // namespace
+
+Result<std::shared_ptr<const GpuMesh>> RendererImpl::mesh(const std::string& name) {
+  std::lock_guard<std::mutex> lock(assetMutex_);
+  auto it = meshes_.find(name);
+  if (it != meshes_.end()) return it->second;
+  auto data = makeBuiltinMesh(name);
+  if (!data) return data.takeError();
+  auto gpu = std::make_shared<GpuMesh>();
+  gpu->name = name;
+  gpu->vertexCount = static_cast<uint32_t>(data->vertices.size());
+  gpu->indexCount = static_cast<uint32_t>(data->indices.size());
+  auto vb = deviceBufferWith(*ctx_, data->vertices.data(), data->vertices.size() * sizeof(Vertex),
+                             VK_BUFFER_USAGE_VERTEX_BUFFER_BIT);
+  if (!vb) return vb.takeError();
+  auto ib = deviceBufferWith(*ctx_, data->indices.data(), data->indices.size() * sizeof(uint32_t),
+                             VK_BUFFER_USAGE_INDEX_BUFFER_BIT);
+  if (!ib) return ib.takeError();
+  gpu->vertices = std::move(vb.value());
+  gpu->indices = std::move(ib.value());
+  meshes_[name] = gpu;
+  return std::shared_ptr<const GpuMesh>(gpu);
+}
+
+std::vector<std::string> RendererImpl::environmentNames() const { return builtinEnvironmentNames(); }
+std::vector<std::string> RendererImpl::meshNames() const { return builtinMeshNames(); }
+
+Result<std::unique_ptr<RenderView>> RendererImpl::createView() {
+  auto view = std::make_unique<RenderViewImpl>(shared_from_this());
+  BRDFA_TRY(view->init());
+  return std::unique_ptr<RenderView>(std::move(view));
+}
+
+}  // namespace brdfa

@@ -1,0 +1,87 @@
+// Device-wide state shared by every RenderView: layouts, fixed pipelines, and the caches of
+// compiled programs, meshes and environments.
+#pragma once
+
+#include <deque>
+#include <map>
+#include <memory>
+#include <mutex>
+#include <unordered_map>
+
+#include "brdfa/renderer.h"
+#include "glsl_compiler.h"
+#include "gpu_assets.h"
+#include "shader_sources.h"
+#include "vk_context.h"
+
+namespace brdfa {
+
+class RendererImpl final : public Renderer, public std::enable_shared_from_this<RendererImpl> {
+ public:
+  static Result<std::shared_ptr<RendererImpl>> create(const RendererOptions& options);
+  ~RendererImpl() override;
+
+  const DeviceInfo& device() const override { return ctx_->info(); }
+  Result<CompileInfo> compileBrdf(const BrdfDefinition& brdf) override;
+  Result<std::unique_ptr<RenderView>> createView() override;
+  std::vector<std::string> environmentNames() const override;
+  std::vector<std::string> meshNames() const override;
+
+  // For views.
+  VkContext& ctx() { return *ctx_; }
+  VkDescriptorSetLayout viewSetLayout() const { return viewSetLayout_; }
+  VkDescriptorSetLayout objectSetLayout() const { return objectSetLayout_; }
+  VkPipelineLayout computeLayout() const { return computeLayout_; }
+  VkPipelineLayout rasterLayout() const { return rasterLayout_; }
+  VkRenderPass gbufferPass() const { return gbufferPass_; }
+  VkPipeline gbufferPipeline() const { return gbufferPipeline_; }
+  VkPipeline resolvePipeline() const { return resolve_->pipeline(); }
+  VkPipeline backgroundPipeline(bool constantEnv) const {
+    return (constantEnv ? backgroundConstant_ : backgroundCube_)->pipeline();
+  }
+  VkSampler environmentSampler() const { return envSampler_; }
+
+  Result<std::shared_ptr<const GpuEnvironment>> environment(const std::string& name);
+  Result<std::shared_ptr<const GpuMesh>> mesh(const std::string& name);
+  // The shading kernel for `brdf` in this variant; compiled once, then served from the cache.
+  Result<std::shared_ptr<const ShadeKernel>> shadeKernel(const BrdfDefinition& brdf, SamplingMode sampling,
+                                                         bool constantEnv);
+
+ private:
+  RendererImpl() = default;
+  Result<void> init(const RendererOptions& options);
+  Result<void> createLayouts();
+  Result<void> createGbufferPipeline();
+  Result<std::unique_ptr<ComputeKernel>> createComputeKernel(const std::vector<uint32_t>& spirv);
+  Result<std::unique_ptr<ComputeKernel>> compileFixedKernel(const std::vector<std::string>& defines,
+                                                            const std::vector<std::string>& pieces,
+                                                            const std::vector<std::string>& extensions = {});
+  // GLSL -> SPIR-V through the content-addressed cache (key: hash of source + compiler).
+  Result<std::shared_ptr<const SpirvBinary>> spirv(ShaderStage stage, const std::string& source, bool* cached);
+  AssembledProgram assembleShadeProgram(const BrdfDefinition& brdf, SamplingMode sampling, bool constantEnv) const;
+
+  std::unique_ptr<VkContext> ctx_;  // declared first: destroyed last
+  ShaderSources sources_;
+  VkDescriptorSetLayout viewSetLayout_ = VK_NULL_HANDLE;
+  VkDescriptorSetLayout objectSetLayout_ = VK_NULL_HANDLE;
+  VkPipelineLayout computeLayout_ = VK_NULL_HANDLE;
+  VkPipelineLayout rasterLayout_ = VK_NULL_HANDLE;
+  VkRenderPass gbufferPass_ = VK_NULL_HANDLE;
+  VkPipeline gbufferPipeline_ = VK_NULL_HANDLE;
+  VkSampler envSampler_ = VK_NULL_HANDLE;
+  std::unique_ptr<ComputeKernel> resolve_, backgroundConstant_, backgroundCube_;
+
+  std::mutex spirvMutex_;
+  std::unordered_map<uint64_t, std::shared_ptr<const SpirvBinary>> spirvCache_;
+  std::deque<uint64_t> spirvOrder_;  // insertion order, for a bounded cache
+
+  std::mutex kernelMutex_;
+  std::unordered_map<uint64_t, std::shared_ptr<const ShadeKernel>> kernelCache_;
+  std::deque<uint64_t> kernelOrder_;
+
+  std::mutex assetMutex_;
+  std::map<std::string, std::shared_ptr<const GpuEnvironment>> environments_;
+  std::map<std::string, std::shared_ptr<const GpuMesh>> meshes_;
+};
+
+}  // namespace brdfa

@@ -1,0 +1,25 @@
+// Camera and object transforms, in one place for the raster pass and the compute kernels.
+#pragma once
+
+#include <glm/glm.hpp>
+
+#include "brdfa/scene.h"
+
+namespace brdfa {
+
+struct CameraFrame {
+  glm::vec3 position;
+  glm::vec3 forward, right, up;  // unit, right-handed, +Y world up
+  float tanHalfFov;
+  float aspect;
+  glm::mat4 viewProj;  // Vulkan clip space, Y flipped so row 0 of the image is the top
+};
+
+// yaw turns toward -X (counter-clockwise seen from above); pitch is clamped to +-89 degrees so
+// the frame never degenerates.
+CameraFrame cameraFrame(const Camera& camera, uint32_t width, uint32_t height);
+
+// translate * rotateZ * rotateY * rotateX * scale (rotation about X is applied first).
+glm::mat4 modelMatrix(const SceneObject& object);
+
+}  // namespace brdfa

@@ -1,0 +1,104 @@
+// RAII owners for Vulkan buffers and images (moved, never copied).
+#pragma once
+
+#include <vulkan/vulkan.h>
+
+#include <cstdint>
+#include <utility>
+
+#include "brdfa/result.h"
+#include "vk_context.h"
+
+namespace brdfa {
+
+class Buffer {
+ public:
+  Buffer() = default;
+  ~Buffer() { reset(); }
+  Buffer(Buffer&& o) noexcept { *this = std::move(o); }
+  Buffer& operator=(Buffer&& o) noexcept;
+
+  // Host-visible buffers are persistently mapped (mapped() != nullptr) and host-coherent.
+  static Result<Buffer> create(VkContext& ctx, VkDeviceSize size, VkBufferUsageFlags usage, bool hostVisible);
+
+  VkBuffer handle() const { return buffer_; }
+  VkDeviceSize size() const { return size_; }
+  void* mapped() const { return mapped_; }
+  void reset();
+
+ private:
+  VkDevice device_ = VK_NULL_HANDLE;
+  VkBuffer buffer_ = VK_NULL_HANDLE;
+  VkDeviceMemory memory_ = VK_NULL_HANDLE;
+  VkDeviceSize size_ = 0;
+  void* mapped_ = nullptr;
+};
+
+struct ImageSpec {
+  uint32_t width = 1, height = 1;
+  uint32_t layers = 1;  // 6 with `cube`
+  bool cube = false;
+  VkFormat format = VK_FORMAT_R32G32B32A32_SFLOAT;
+  VkImageUsageFlags usage = 0;
+  VkImageAspectFlags aspect = VK_IMAGE_ASPECT_COLOR_BIT;
+};
+
+class Image {
+ public:
+  Image() = default;
+  ~Image() { reset(); }
+  Image(Image&& o) noexcept { *this = std::move(o); }
+  Image& operator=(Image&& o) noexcept;
+
+  static Result<Image> create(VkContext& ctx, const ImageSpec& spec);
+
+  VkImage handle() const { return image_; }
+  VkImageView view() const { return view_; }
+  const ImageSpec& spec() const { return spec_; }
+  void reset();
+
+ private:
+  VkDevice device_ = VK_NULL_HANDLE;
+  VkImage image_ = VK_NULL_HANDLE;
+  VkImageView view_ = VK_NULL_HANDLE;
+  VkDeviceMemory memory_ = VK_NULL_HANDLE;
+  ImageSpec spec_;
+};
+
+// A command pool with one primary command buffer and a fence, for one thread at a time.
+class CommandContext {
+ public:
+  CommandContext() = default;
+  ~CommandContext() { reset(); }
+  CommandContext(CommandContext&& o) noexcept { *this = std::move(o); }
+  CommandContext& operator=(CommandContext&& o) noexcept;
+
+  static Result<CommandContext> create(VkContext& ctx);
+
+  // Resets and begins recording.
+  Result<VkCommandBuffer> begin();
+  // Ends recording, submits and waits for completion.
+  Result<void> submitAndWait();
+  void reset();
+
+ private:
+  VkContext* ctx_ = nullptr;
+  VkCommandPool pool_ = VK_NULL_HANDLE;
+  VkCommandBuffer commands_ = VK_NULL_HANDLE;
+  VkFence fence_ = VK_NULL_HANDLE;
+};
+
+// Records a global memory barrier between two pipeline stages.
+void memoryBarrier(VkCommandBuffer cb, VkPipelineStageFlags src, VkAccessFlags srcAccess,
+                   VkPipelineStageFlags dst, VkAccessFlags dstAccess);
+
+// Records a layout transition of all subresources of `image`.
+void imageBarrier(VkCommandBuffer cb, const Image& image, VkImageLayout from, VkImageLayout to,
+                  VkPipelineStageFlags src, VkAccessFlags srcAccess, VkPipelineStageFlags dst,
+                  VkAccessFlags dstAccess);
+
+// Uploads tightly packed texels to every layer of `image` (layer-major) and leaves it in
+// SHADER_READ_ONLY_OPTIMAL.
+Result<void> uploadImage(VkContext& ctx, const Image& image, const void* texels, VkDeviceSize bytes);
+
+}  // namespace brdfa
