@@ -1,0 +1,22 @@
+// brdfa-bench: prints the figures DESIGN.md section 5 asks for, as medians, in one run.
+//   brdfa-bench [--rounds N] [--source DIR]
+#include <cstdio>
+#include <cstdlib>
+#include <string>
+
+#include "bench_renderer.h"
+
+int main(int argc, char** argv) {
+  std::string source = BRDFA_SOURCE_DIR;
+  int rounds = 15;
+  for (int i = 1; i < argc; ++i) {
+    std::string a = argv[i];
+    if (a == "--rounds" && i + 1 < argc) rounds = std::atoi(argv[++i]);
+    else if (a == "--source" && i + 1 < argc) source = argv[++i];
+    else {
+      std::fprintf(stderr, "usage: brdfa-bench [--rounds N] [--source DIR]\n");
+      return 2;
+    }
+  }
+  return brdfa::bench::runRendererBench(source, rounds);
+}
