@@ -288,9 +288,11 @@ Result<std::shared_ptr<const SpirvBinary>> RendererImpl::spirv(ShaderStage stage
     auto it = spirvCache_.find(key);
     if (it != spirvCache_.end()) {
       if (cached) *cached = true;
+      ++spirvCacheHits_;
       return it->second;
     }
   }
+  ++glslCompiles_;
   auto compiled = compileGlsl(stage, source);
   if (!compiled) return compiled.takeError();
   auto shared = std::make_shared<const SpirvBinary>(std::move(compiled.value()));
@@ -341,6 +343,7 @@ Result<std::shared_ptr<const ShadeKernel>> RendererImpl::shadeKernel(const BrdfD
   if (!code) return code.takeError();
   auto kernel = createComputeKernel((*code)->words);
   if (!kernel) return kernel.takeError();
+  ++pipelinesCreated_;
   auto shade = std::make_shared<ShadeKernel>();
   shade->kernel = std::move(kernel.value());
   shade->params = program.params;
@@ -414,6 +417,10 @@ Result<std::shared_ptr<const GpuMesh>> RendererImpl::mesh(const std::string& nam
   gpu->indices = std::move(ib.value());
   meshes_[name] = gpu;
   return std::shared_ptr<const GpuMesh>(gpu);
+}
+
+RendererCounters RendererImpl::counters() const {
+  return RendererCounters{glslCompiles_.load(), spirvCacheHits_.load(), pipelinesCreated_.load()};
 }
 
 std::vector<std::string> RendererImpl::environmentNames() const { return builtinEnvironmentNames(); }

@@ -2,6 +2,7 @@
 // compiled programs, meshes and environments.
 #pragma once
 
+#include <atomic>
 #include <deque>
 #include <map>
 #include <memory>
@@ -24,6 +25,7 @@ class RendererImpl final : public Renderer, public std::enable_shared_from_this<
   const DeviceInfo& device() const override { return ctx_->info(); }
   Result<CompileInfo> compileBrdf(const BrdfDefinition& brdf) override;
   Result<std::unique_ptr<RenderView>> createView() override;
+  RendererCounters counters() const override;
   std::vector<std::string> environmentNames() const override;
   std::vector<std::string> meshNames() const override;
 
@@ -78,6 +80,8 @@ class RendererImpl final : public Renderer, public std::enable_shared_from_this<
   std::mutex kernelMutex_;
   std::unordered_map<uint64_t, std::shared_ptr<const ShadeKernel>> kernelCache_;
   std::deque<uint64_t> kernelOrder_;
+
+  std::atomic<uint64_t> glslCompiles_{0}, spirvCacheHits_{0}, pipelinesCreated_{0};
 
   std::mutex assetMutex_;
   std::map<std::string, std::shared_ptr<const GpuEnvironment>> environments_;

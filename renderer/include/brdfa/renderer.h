@@ -77,6 +77,14 @@ class RenderView {
   virtual Result<Frame> readFrame(bool linear) = 0;
 };
 
+// Work the renderer has done since it started: what tests and operators use to see that a
+// change did (or did not) compile anything.
+struct RendererCounters {
+  uint64_t glslCompiles = 0;     // GLSL -> SPIR-V runs (SPIR-V cache misses)
+  uint64_t spirvCacheHits = 0;
+  uint64_t pipelinesCreated = 0; // shading pipelines built (each costs a driver JIT)
+};
+
 class Renderer {
  public:
   virtual ~Renderer() = default;
@@ -91,6 +99,8 @@ class Renderer {
   virtual Result<CompileInfo> compileBrdf(const BrdfDefinition& brdf) = 0;
 
   virtual Result<std::unique_ptr<RenderView>> createView() = 0;
+
+  virtual RendererCounters counters() const = 0;
 
   virtual std::vector<std::string> environmentNames() const = 0;
   virtual std::vector<std::string> meshNames() const = 0;
