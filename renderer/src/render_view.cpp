@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstring>
 
+#include "host_resolve.h"
 #include "scene_check.h"
 #include "scene_math.h"
 #include "vk_check.h"
@@ -130,9 +131,11 @@ Result<void> RenderViewImpl::resize(uint32_t width, uint32_t height) {
   const VkDeviceSize pixels = VkDeviceSize(width) * height;
   const VkBufferUsageFlags storage = VK_BUFFER_USAGE_STORAGE_BUFFER_BIT;
   struct Want { Buffer* buffer; VkDeviceSize size; VkBufferUsageFlags usage; bool host; };
+  // With the host resolve, the host reads the G-buffer and accumulators in place.
+  const bool host = r_->hostResolve();
   const Want wants[5] = {
-      {&gbuffer_, pixels * 3 * 16, storage | VK_BUFFER_USAGE_TRANSFER_DST_BIT, false},
-      {&accum_, pixels * 2 * 16, storage | VK_BUFFER_USAGE_TRANSFER_DST_BIT, false},
+      {&gbuffer_, pixels * 3 * 16, storage | VK_BUFFER_USAGE_TRANSFER_DST_BIT, host},
+      {&accum_, pixels * 2 * 16, storage | VK_BUFFER_USAGE_TRANSFER_DST_BIT, host},
       {&outRgba8_, pixels * 4, storage, true},
       {&outFloat_, pixels * 16, storage, true},
       {&partials_, VkDeviceSize(partialCount(width, height)) * 16, storage, true}};
@@ -391,17 +394,31 @@ void RenderViewImpl::recordResolve(VkCommandBuffer cb, bool linear) {
   vkCmdDispatch(cb, groups(width_, kResolveGroup), groups(height_, kResolveGroup), 1);
 }
 
-void RenderViewImpl::updateRelError() {
+ErrorSums RenderViewImpl::deviceErrorSums() const {
   const auto* partials = static_cast<const float*>(partials_.mapped());
   const size_t n = partialCount(width_, height_);
-  double variance = 0, luminance = 0, pixels = 0;
+  ErrorSums sums;
   for (size_t i = 0; i < n; ++i) {
-    variance += partials[4 * i + 0];
-    luminance += partials[4 * i + 1];
-    pixels += partials[4 * i + 2];
+    sums.variance += partials[4 * i + 0];
+    sums.luminance += partials[4 * i + 1];
+    sums.pixels += partials[4 * i + 2];
   }
-  if (pixels > 0 && luminance > 0)
-    stats_.relError = std::sqrt(variance / pixels) / (luminance / pixels);
+  return sums;
+}
+
+HostResolveInput RenderViewImpl::hostResolveInput() const {
+  HostResolveInput in;
+  in.accum = static_cast<const float*>(accum_.mapped());
+  in.positions = static_cast<const float*>(gbuffer_.mapped());
+  in.pixels = size_t(width_) * height_;
+  in.exposureScale = std::exp2(scene_.render.exposure);
+  return in;
+}
+
+void RenderViewImpl::setRelError(const ErrorSums& sums) {
+  double e = relativeError(sums);
+  if (e >= 0)
+    stats_.relError = e;
   else
     stats_.relError.reset();
   sinceErrorMs_ = 0;
@@ -441,7 +458,7 @@ Result<FrameStats> RenderViewImpl::renderPass() {
   // Refresh the error estimate in the same submission when it is due (and a second half exists).
   const bool refreshError = stats_.passes >= 1 &&
                             (sinceErrorMs_ >= kErrorRefreshMs || stats_.spp + count >= maxSamples);
-  if (refreshError) {
+  if (refreshError && !r_->hostResolve()) {
     memoryBarrier(cb, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_ACCESS_SHADER_WRITE_BIT,
                   VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_ACCESS_SHADER_READ_BIT);
     recordResolve(cb, false);
@@ -459,7 +476,8 @@ Result<FrameStats> RenderViewImpl::renderPass() {
   stats_.nanSamples = *static_cast<const uint32_t*>(counters_.mapped());
   stats_.converged = stats_.spp >= maxSamples;
   sinceErrorMs_ += ms;
-  if (refreshError) updateRelError();
+  if (refreshError)
+    setRelError(r_->hostResolve() ? resolveOnHost(hostResolveInput(), nullptr, nullptr) : deviceErrorSums());
   return stats_;
 }
 
@@ -471,27 +489,35 @@ FrameStats RenderViewImpl::stats() const {
 Result<Frame> RenderViewImpl::readFrame(bool linear) {
   std::lock_guard<std::mutex> lock(mutex_);
   if (!hasScene_) return makeError(ErrorCode::InvalidArgument, "no scene has been set");
-  auto begun = cmd_.begin();
-  if (!begun) return begun.takeError();
-  VkCommandBuffer cb = *begun;
-  recordPending(cb);
-  recordResolve(cb, linear);
-  memoryBarrier(cb, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_ACCESS_SHADER_WRITE_BIT,
-                VK_PIPELINE_STAGE_HOST_BIT, VK_ACCESS_HOST_READ_BIT);
-  BRDFA_TRY(cmd_.submitAndWait());
-  gbufferPending_ = clearPending_ = false;
-  if (stats_.passes >= 2) updateRelError();
+  const bool host = r_->hostResolve();
+  if (!host || gbufferPending_ || clearPending_) {
+    auto begun = cmd_.begin();
+    if (!begun) return begun.takeError();
+    VkCommandBuffer cb = *begun;
+    recordPending(cb);
+    if (!host) recordResolve(cb, linear);
+    memoryBarrier(cb, VK_PIPELINE_STAGE_TRANSFER_BIT | VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT,
+                  VK_ACCESS_TRANSFER_WRITE_BIT | VK_ACCESS_SHADER_WRITE_BIT, VK_PIPELINE_STAGE_HOST_BIT,
+                  VK_ACCESS_HOST_READ_BIT);
+    BRDFA_TRY(cmd_.submitAndWait());
+    gbufferPending_ = clearPending_ = false;
+  }
 
   Frame frame;
   frame.width = static_cast<int>(width_);
   frame.height = static_cast<int>(height_);
   const size_t pixels = size_t(width_) * height_;
-  const auto* rgba8 = static_cast<const uint8_t*>(outRgba8_.mapped());
-  frame.rgba8.assign(rgba8, rgba8 + pixels * 4);
-  if (linear) {
-    const auto* f = static_cast<const float*>(outFloat_.mapped());
-    frame.rgba32f.assign(f, f + pixels * 4);
+  frame.rgba8.resize(pixels * 4);
+  if (linear) frame.rgba32f.resize(pixels * 4);
+  ErrorSums sums;
+  if (host) {
+    sums = resolveOnHost(hostResolveInput(), frame.rgba8.data(), linear ? frame.rgba32f.data() : nullptr);
+  } else {
+    std::memcpy(frame.rgba8.data(), outRgba8_.mapped(), pixels * 4);
+    if (linear) std::memcpy(frame.rgba32f.data(), outFloat_.mapped(), pixels * 16);
+    sums = deviceErrorSums();
   }
+  if (stats_.passes >= 2) setRelError(sums);
   frame.stats = stats_;
   return frame;
 }

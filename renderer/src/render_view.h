@@ -7,6 +7,7 @@
 
 #include "brdfa/renderer.h"
 #include "gpu_assets.h"
+#include "host_resolve.h"
 #include "renderer_impl.h"
 
 namespace brdfa {
@@ -40,7 +41,9 @@ class RenderViewImpl final : public RenderView {
   // accumulators and writing the background.
   void recordPending(VkCommandBuffer cb);
   void recordResolve(VkCommandBuffer cb, bool linear);
-  void updateRelError();
+  ErrorSums deviceErrorSums() const;  // from the resolve kernel's partial sums
+  HostResolveInput hostResolveInput() const;
+  void setRelError(const ErrorSums& sums);
   // Entries of the error partial-sum buffer: one per subgroup of each resolve workgroup.
   size_t partialCount(uint32_t width, uint32_t height) const;
   ComputePush basePush() const;

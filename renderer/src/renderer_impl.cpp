@@ -44,6 +44,8 @@ Result<void> RendererImpl::init(const RendererOptions& options) {
   auto ctx = VkContext::create(options);
   if (!ctx) return ctx.takeError();
   ctx_ = std::move(ctx.value());
+  hostResolve_ = options.resolve == ResolveMode::Host ||
+                 (options.resolve == ResolveMode::Auto && ctx_->info().type == "cpu");
   BRDFA_TRY(createLayouts());
   BRDFA_TRY(createGbufferPipeline());
 

@@ -42,6 +42,7 @@ class RendererImpl final : public Renderer, public std::enable_shared_from_this<
     return (constantEnv ? backgroundConstant_ : backgroundCube_)->pipeline();
   }
   VkSampler environmentSampler() const { return envSampler_; }
+  bool hostResolve() const { return hostResolve_; }
 
   Result<std::shared_ptr<const GpuEnvironment>> environment(const std::string& name);
   Result<std::shared_ptr<const GpuMesh>> mesh(const std::string& name);
@@ -72,6 +73,7 @@ class RendererImpl final : public Renderer, public std::enable_shared_from_this<
   VkPipeline gbufferPipeline_ = VK_NULL_HANDLE;
   VkSampler envSampler_ = VK_NULL_HANDLE;
   std::unique_ptr<ComputeKernel> resolve_, backgroundConstant_, backgroundCube_;
+  bool hostResolve_ = false;
 
   std::mutex spirvMutex_;
   std::unordered_map<uint64_t, std::shared_ptr<const SpirvBinary>> spirvCache_;

@@ -14,10 +14,15 @@
 
 namespace brdfa {
 
+// Where accumulators are resolved into frames: by a compute kernel, or by a C++ loop over the
+// mapped accumulators (much faster on CPU devices, where device memory is host memory).
+enum class ResolveMode { Auto, Device, Host };  // Auto: Host on CPU devices, Device on GPUs
+
 struct RendererOptions {
   std::string deviceName;  // substring of the device name to pick; empty = prefer a real GPU
   std::string shaderDir;   // directory holding shaders/lib and shaders/kernels
   bool validation = false; // enable VK_LAYER_KHRONOS_validation when present
+  ResolveMode resolve = ResolveMode::Auto;
 };
 
 struct DeviceInfo {
