@@ -1,0 +1,34 @@
+// Start-up settings of the HTTP service and their command-line parser (cpp-httplib's docker
+// example style: one plain struct, one parse function, no globals).
+#pragma once
+
+#include <optional>
+#include <string>
+
+namespace brdfa::server {
+
+struct ServerConfig {
+  std::string host = "127.0.0.1";  // DESIGN.md section 6: loopback unless told otherwise
+  int port = 8080;                 // 0 = let the kernel pick a free port
+  std::string root;                // holds shaders/ and web/
+  std::string dataDir = "./data";  // user BRDFs and uploads (persistence is a later issue)
+  std::string deviceName;          // substring of the Vulkan device name; empty = best device
+  int threads = 64;                // HTTP workers; every stream client holds one
+  int idleTimeoutSec = 30;         // a session with no watcher for this long stops rendering
+};
+
+// What parse_command_line decided: run with `config`, or exit with `exitCode` after printing
+// `message` (usage on --help goes to stdout with code 0; errors to stderr with code 2).
+struct ParseOutcome {
+  std::optional<ServerConfig> config;
+  int exitCode = 0;
+  std::string message;
+};
+
+// The root defaults to $BRDFA_ROOT when set, else the compiled-in source tree
+// (BRDFA_DEFAULT_ROOT); `--root` overrides both.
+ParseOutcome parse_command_line(int argc, const char* const* argv);
+
+std::string usageText(const char* program);
+
+}  // namespace brdfa::server

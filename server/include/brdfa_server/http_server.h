@@ -1,0 +1,42 @@
+// The HTTP front: a cpp-httplib server with the routes over one Service.
+#pragma once
+
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "brdfa/result.h"
+#include "brdfa_server/config.h"
+
+namespace httplib {
+class Server;
+}
+
+namespace brdfa::server {
+
+struct Service;
+
+class HttpServer {
+ public:
+  // Opens the device and sets up routes; binds nothing yet. `log` gets start-up warnings.
+  static Result<std::unique_ptr<HttpServer>> create(const ServerConfig& config, std::vector<std::string>& log);
+  ~HttpServer();
+
+  // Binds config.host:config.port (port 0: any free port). Returns the bound port, or an error.
+  Result<int> bind();
+
+  // Serves until stop(). Returns false when the listener failed.
+  bool run();
+
+  // Safe from any thread, more than once: wakes streams and waiters, stops sessions, closes the
+  // listener. run() returns once the worker threads have finished.
+  void stop();
+
+ private:
+  HttpServer() = default;
+  std::unique_ptr<Service> service_;
+  std::unique_ptr<httplib::Server> http_;
+  ServerConfig config_;
+};
+
+}  // namespace brdfa::server

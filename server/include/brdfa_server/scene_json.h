@@ -1,0 +1,40 @@
+// Scene JSON (DESIGN.md section 4) <-> brdfa::Scene. Every field is optional; missing ones take
+// the defaults below. Validation is strict and names the offending field ("render.width",
+// "objects[0].params.Kd"): wrong types, non-finite or absurd numbers and unknown keys are
+// InvalidArgument (400), unknown BRDF/environment/mesh names NotFound (404).
+#pragma once
+
+#include <memory>
+#include <nlohmann/json.hpp>
+#include <string>
+#include <vector>
+
+#include "brdfa/result.h"
+#include "brdfa/scene.h"
+#include "brdfa_server/brdf_library.h"
+
+namespace brdfa::server {
+
+// What names in a scene can resolve to.
+struct SceneResolver {
+  const BrdfLibrary* library = nullptr;
+  // The BRDF that objects named "inline" use (one-shot renders); null = "inline" is refused.
+  std::shared_ptr<const BrdfDefinition> inlineBrdf;
+  std::vector<std::string> environments;
+  std::vector<std::string> meshes;
+};
+
+// Defaults for fields the JSON leaves out (the Scene struct's own defaults, plus these).
+inline constexpr const char* kDefaultMesh = "sphere";
+inline constexpr const char* kDefaultBrdf = "lambert";  // also the one object of a scene without "objects"
+inline constexpr const char* kInlineBrdfName = "inline";
+
+// Parses and validates. Every object's params are filled in completely (explicit value or the
+// BRDF's default), so sceneToJson(sceneFromJson(j)) lists them all and parses back to an equal
+// Scene.
+Result<Scene> sceneFromJson(const nlohmann::json& json, const SceneResolver& resolver);
+
+// The full scene with every field present.
+nlohmann::json sceneToJson(const Scene& scene);
+
+}  // namespace brdfa::server

@@ -1,0 +1,78 @@
+// Everything the routes share: the renderer, the BRDF library, the sessions and the limits.
+// Routes hold a reference to one Service; it outlives the HTTP server's worker threads.
+#pragma once
+
+#include <atomic>
+#include <chrono>
+#include <condition_variable>
+#include <memory>
+#include <mutex>
+#include <string>
+#include <vector>
+
+#include "brdfa/renderer.h"
+#include "brdfa_server/brdf_library.h"
+#include "brdfa_server/config.h"
+#include "brdfa_server/scene_json.h"
+#include "brdfa_server/session_manager.h"
+
+namespace brdfa::server {
+
+// Limits that keep one client from starving the others (DESIGN.md section 6).
+inline constexpr size_t kMaxSessions = 32;                  // including `default`; 429 beyond
+inline constexpr int kMaxStreams = 48;                      // concurrent stream clients; 503 beyond
+inline constexpr int kMaxConcurrentRenders = 2;             // one-shot renders at once
+inline constexpr std::chrono::seconds kRenderSlotWait{30};  // then 503 busy
+inline constexpr std::chrono::seconds kFrameWait{60};       // min_spp wait bound
+inline constexpr int kMaxOneShotSpp = 65536;
+inline constexpr int kMaxQueuedRenders = 8;  // waiting for a slot; 503 beyond
+
+// A counting semaphore whose waiters give up on timeout or shutdown.
+class RenderSlots {
+ public:
+  RenderSlots(int count, int maxWaiting) : free_(count), maxWaiting_(maxWaiting) {}
+  // True when a slot was taken; the caller must release() it. False at once when
+  // `maxWaiting` callers already wait, else after `timeout` or on shutdown.
+  bool acquire(std::chrono::milliseconds timeout);
+  void release();
+  void shutdown();
+
+ private:
+  std::mutex mutex_;
+  std::condition_variable cv_;
+  int free_;
+  const int maxWaiting_;
+  int waiting_ = 0;
+  bool shutdown_ = false;
+};
+
+struct Service {
+  // Opens the device, loads the built-in BRDFs and sets up the `default` session (its scene is
+  // applied lazily, on first use). `log` receives start-up warnings.
+  static Result<std::unique_ptr<Service>> create(const ServerConfig& config, std::vector<std::string>& log);
+
+  // Name resolution for scene JSON; `inlineBrdf` enables objects with "brdf": "inline".
+  SceneResolver resolver(std::shared_ptr<const BrdfDefinition> inlineBrdf = nullptr) const;
+
+  // Wakes every waiter and stops every session: streams end, frame waits return, one-shot
+  // renders abort between passes.
+  void beginShutdown();
+
+  ServerConfig config;
+  std::shared_ptr<Renderer> renderer;  // declared before sessions: views die before the device
+  BrdfLibrary library;
+  std::unique_ptr<SessionManager> sessions;
+  RenderSlots renderSlots{kMaxConcurrentRenders, kMaxQueuedRenders};
+  // Requests that hold an HTTP worker for long (streams, frame waits) are capped below the
+  // worker count so that short requests (stats, scene edits, health) always find a worker.
+  int maxStreams = kMaxStreams;
+  int maxFrameWaiters = 16;
+  std::atomic<int> activeStreams{0};
+  std::atomic<int> frameWaiters{0};
+  std::atomic<bool> stopping{false};
+};
+
+// The scene of the `default` session: one GGX sphere under the sky, 512x512.
+nlohmann::json defaultSessionSceneJson();
+
+}  // namespace brdfa::server

@@ -1,0 +1,149 @@
+// An interactive session: one RenderView, its scene (as JSON and as brdfa::Scene), a render
+// thread that runs progressive passes only while the scene is unconverged and somebody watches
+// (a stream client, a frame waiter, or a frame/stats request within the idle timeout), and an
+// encoder thread that turns frames read back for stream clients into PNGs. Otherwise both
+// sleep on condition variables, so a converged or unwatched session costs no CPU.
+#pragma once
+
+#include <atomic>
+#include <chrono>
+#include <condition_variable>
+#include <cstdint>
+#include <functional>
+#include <memory>
+#include <mutex>
+#include <nlohmann/json.hpp>
+#include <optional>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "brdfa/renderer.h"
+
+namespace brdfa::server {
+
+// The latest PNG published for stream clients. `seq` grows with every publication.
+struct StreamFrame {
+  std::shared_ptr<const std::vector<uint8_t>> png;
+  uint64_t seq = 0;
+  uint64_t spp = 0;
+};
+
+class Session {
+ public:
+  using Clock = std::chrono::steady_clock;
+
+  Session(std::string id, std::unique_ptr<RenderView> view, std::chrono::milliseconds idleTimeout);
+  ~Session();  // stop()
+  Session(const Session&) = delete;
+  Session& operator=(const Session&) = delete;
+
+  const std::string& id() const { return id_; }
+
+  // --- Scene. Updates are serialized by a lock the caller holds across read-modify-write
+  // (PATCH reads the current JSON, merges, validates, applies).
+
+  // A deferred first scene (the default session's): it runs on the first beginSceneUpdate
+  // that asks for it, so nothing is compiled at server start.
+  void setInitializer(std::function<void(Session&, std::unique_lock<std::mutex>&)> init);
+
+  // Locks scene updates. With `runInitializer`, a pending initializer runs first (callers that
+  // read the current scene need it; a PUT that replaces it does not).
+  std::unique_lock<std::mutex> beginSceneUpdate(bool runInitializer = true);
+
+  // Runs a pending initializer; cheap (no lock) once there is none. Readers call this first.
+  void ensureInitialized();
+
+  // view->setScene under the update lock; on success stores scene and JSON, resets progress
+  // and wakes the render thread. On error nothing changes (the renderer keeps the old scene).
+  Result<void> applyScene(std::unique_lock<std::mutex>& updateLock, const Scene& scene, nlohmann::json sceneJson);
+
+  bool hasScene() const;
+  nlohmann::json sceneJson() const;  // null until a scene was applied
+
+  // --- Progress.
+
+  // Marks the session watched for the idle timeout (frame and stats requests).
+  void touch();
+  FrameStats stats() const;  // as of the latest pass; never blocks on the device
+  std::optional<Error> renderError() const;
+
+  enum class WaitOutcome { Reached, TimedOut, Stopped, Failed };
+  // Waits until spp >= min(minSpp, max_samples), the scene converged, rendering failed, the
+  // session stopped, or `timeout` passed. Counts as a watcher while waiting.
+  WaitOutcome waitForSamples(uint64_t minSpp, std::chrono::milliseconds timeout);
+
+  Result<Frame> readFrame(bool linear);
+
+  // --- Streaming.
+  void addStreamClient();
+  void removeStreamClient();
+  int streamClients() const;
+  // The latest published frame when its seq is greater than `afterSeq`; waits up to `timeout`
+  // for one. nullopt on timeout or stop.
+  std::optional<StreamFrame> waitForStreamFrame(uint64_t afterSeq, std::chrono::milliseconds timeout);
+  std::optional<StreamFrame> latestStreamFrame() const;
+
+  // Stops the render thread and wakes every waiter; idempotent. Streams end on their next wake.
+  void stop();
+  bool stopped() const;
+
+  // Minimum interval between published stream frames (about 30 per second).
+  static constexpr std::chrono::milliseconds kPublishInterval{33};
+
+ private:
+  void renderLoop();
+  void encodeLoop();
+  void guarded(void (Session::*loop)());
+  bool watchedLocked(Clock::time_point now) const;
+  void publishFrame(std::unique_lock<std::mutex>& lock);
+  // Runs a view call from a request thread. The view serializes calls with a plain mutex,
+  // which is not fair: a render thread that starts the next pass right after the last would
+  // starve readFrame/setScene. The render thread holds off while such calls are pending.
+  template <class F>
+  auto withViewPriority(F&& call) -> decltype(call());
+
+  const std::string id_;
+  const std::unique_ptr<RenderView> view_;
+  const std::chrono::milliseconds idleTimeout_;
+
+  std::mutex sceneUpdateMutex_;  // order: sceneUpdateMutex_ before mutex_
+  std::function<void(Session&, std::unique_lock<std::mutex>&)> initializer_;
+  std::atomic<bool> initPending_{false};
+
+  mutable std::mutex mutex_;
+  std::condition_variable wake_;      // render thread: scene changed, watched, stream added, stop
+  std::condition_variable progress_;  // frame waiters: a pass finished
+  std::condition_variable frames_;    // stream clients: a frame was published
+  bool stopping_ = false;
+  bool hasScene_ = false;
+  nlohmann::json sceneJson_;
+  int maxSamples_ = 0;
+  FrameStats stats_;
+  std::optional<Error> renderError_;
+  Clock::time_point watchedUntil_{};
+  int waiters_ = 0;
+  int pendingViewCalls_ = 0;
+  int streamClients_ = 0;
+  bool publishRequested_ = false;
+  Clock::time_point lastPublish_{};
+  StreamFrame latest_;
+  // A frame read back for the stream, waiting for the encoder thread. Only the newest is kept:
+  // when encoding falls behind, older frames are dropped rather than queued.
+  struct RawFrame {
+    std::vector<uint8_t> rgba8;
+    int width = 0, height = 0;
+    uint64_t spp = 0, sceneVersion = 0;
+  };
+  std::optional<RawFrame> pendingRaw_;
+  std::condition_variable encodeWake_;
+
+  std::mutex joinMutex_;  // DELETE and server shutdown may both stop a session; one joins
+
+  // Last: they start after every member above is constructed. PNG encoding runs on its own
+  // thread so the render thread goes on with the next pass meanwhile.
+  std::thread thread_;
+  std::thread encoder_;
+};
+
+}  // namespace brdfa::server

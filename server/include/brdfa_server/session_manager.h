@@ -1,0 +1,54 @@
+// The set of live sessions. `default` always exists and cannot be deleted. Thread-safe.
+#pragma once
+
+#include <chrono>
+#include <map>
+#include <memory>
+#include <mutex>
+#include <string>
+#include <vector>
+
+#include "brdfa/renderer.h"
+#include "brdfa_server/session.h"
+
+namespace brdfa::server {
+
+inline constexpr const char* kDefaultSessionId = "default";
+
+class SessionManager {
+ public:
+  SessionManager(std::shared_ptr<Renderer> renderer, std::chrono::milliseconds idleTimeout, size_t maxSessions);
+  ~SessionManager();  // stopAll()
+
+  struct Created {
+    std::shared_ptr<Session> session;  // null when full or on error
+    bool full = false;                 // the session cap was reached
+    std::optional<Error> error;        // createView failed
+  };
+  // A new session with the given id, or a random 16-hex-digit one when `id` is empty.
+  Created create(const std::string& id = {});
+
+  std::shared_ptr<Session> find(const std::string& id) const;
+  std::vector<std::shared_ptr<Session>> list() const;
+
+  enum class RemoveOutcome { Removed, NotFound, Protected };
+  // Stops the session (its render thread joins, its streams end) and forgets it.
+  RemoveOutcome remove(const std::string& id);
+
+  // Stops every session (server shutdown). New creations fail afterwards.
+  void stopAll();
+
+  size_t maxSessions() const { return maxSessions_; }
+
+ private:
+  std::string randomId();
+
+  const std::shared_ptr<Renderer> renderer_;
+  const std::chrono::milliseconds idleTimeout_;
+  const size_t maxSessions_;
+  mutable std::mutex mutex_;
+  std::map<std::string, std::shared_ptr<Session>> sessions_;
+  bool stopped_ = false;
+};
+
+}  // namespace brdfa::server

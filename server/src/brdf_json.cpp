@@ -1,0 +1,45 @@
+#include "brdfa_server/brdf_json.h"
+
+#include "brdfa_server/json_numbers.h"
+
+namespace brdfa::server {
+
+const char* brdfFormatName(BrdfFormat format) { return format == BrdfFormat::Legacy ? "legacy" : "explorer"; }
+
+nlohmann::json paramValueToJson(ParamType type, const Vec3& value) {
+  switch (type) {
+    case ParamType::Float:
+      return floatForJson(value[0]);
+    case ParamType::Bool:
+      return value[0] != 0.0f;
+    case ParamType::Color:
+      return nlohmann::json::array({floatForJson(value[0]), floatForJson(value[1]), floatForJson(value[2])});
+  }
+  return nullptr;
+}
+
+nlohmann::json paramsToJson(const std::vector<BrdfParam>& params) {
+  nlohmann::json out = nlohmann::json::array();
+  for (const BrdfParam& p : params) {
+    // Colours and bools have fixed ranges in the format; report them so a UI needs no cases.
+    float lo = p.type == ParamType::Float ? p.min : 0.0f;
+    float hi = p.type == ParamType::Float ? p.max : 1.0f;
+    out.push_back({{"name", p.name},
+                   {"type", paramTypeName(p.type)},
+                   {"min", floatForJson(lo)},
+                   {"max", floatForJson(hi)},
+                   {"default", paramValueToJson(p.type, p.defaultValue)}});
+  }
+  return out;
+}
+
+nlohmann::json brdfEntryToJson(const BrdfEntry& entry, bool withSource) {
+  nlohmann::json out{{"name", entry.name},
+                     {"format", brdfFormatName(entry.definition->format)},
+                     {"builtin", entry.builtin},
+                     {"params", paramsToJson(entry.definition->params)}};
+  if (withSource) out["source"] = entry.source;
+  return out;
+}
+
+}  // namespace brdfa::server

@@ -1,0 +1,115 @@
+#include "brdfa_server/config.h"
+
+#include <charconv>
+#include <cstdlib>
+#include <string_view>
+
+#ifndef BRDFA_DEFAULT_ROOT
+#define BRDFA_DEFAULT_ROOT "."
+#endif
+
+namespace brdfa::server {
+
+namespace {
+
+// Whole-string integer parse: "80x" or "" is an error, not 80 or 0.
+std::optional<long long> parseInteger(std::string_view text) {
+  long long value = 0;
+  const char* end = text.data() + text.size();
+  auto [ptr, ec] = std::from_chars(text.data(), end, value);
+  if (ec != std::errc() || ptr != end || text.empty()) return std::nullopt;
+  return value;
+}
+
+ParseOutcome fail(std::string message) {
+  ParseOutcome out;
+  out.exitCode = 2;
+  out.message = std::move(message);
+  return out;
+}
+
+}  // namespace
+
+std::string usageText(const char* program) {
+  std::string p = program ? program : "brdfa-server";
+  return "usage: " + p +
+         " [options]\n"
+         "  --port N          TCP port (default 8080; 0 picks a free port)\n"
+         "  --host ADDR       address to bind (default 127.0.0.1)\n"
+         "  --root DIR        directory holding shaders/ and web/ (default $BRDFA_ROOT or the\n"
+         "                    source tree the server was built from)\n"
+         "  --data-dir DIR    where user data lives (default ./data)\n"
+         "  --device NAME     pick the Vulkan device whose name contains NAME\n"
+         "  --threads N       HTTP worker threads (default 64; each stream client holds one)\n"
+         "  --idle-timeout S  seconds a session keeps rendering without a watcher (default 30)\n"
+         "  --help            show this text\n"
+         "On start prints one line `listening on http://HOST:PORT` to stdout.\n";
+}
+
+ParseOutcome parse_command_line(int argc, const char* const* argv) {
+  ServerConfig config;
+  const char* envRoot = std::getenv("BRDFA_ROOT");
+  config.root = (envRoot && *envRoot) ? envRoot : BRDFA_DEFAULT_ROOT;
+
+  for (int i = 1; i < argc; ++i) {
+    std::string_view arg = argv[i];
+    if (arg == "--help" || arg == "-h") {
+      ParseOutcome out;
+      out.exitCode = 0;
+      out.message = usageText(argv[0]);
+      return out;
+    }
+    // Accept both `--flag value` and `--flag=value`.
+    std::string_view name = arg;
+    std::optional<std::string> inlineValue;
+    if (size_t eq = arg.find('='); arg.starts_with("--") && eq != std::string_view::npos) {
+      name = arg.substr(0, eq);
+      inlineValue = std::string(arg.substr(eq + 1));
+    }
+    auto takeValue = [&]() -> std::optional<std::string> {
+      if (inlineValue) return inlineValue;
+      if (i + 1 >= argc) return std::nullopt;
+      return std::string(argv[++i]);
+    };
+    auto takeInt = [&](long long lo, long long hi, int& dst) -> std::optional<std::string> {
+      auto v = takeValue();
+      if (!v) return std::string(name) + " needs a value";
+      auto n = parseInteger(*v);
+      if (!n || *n < lo || *n > hi)
+        return std::string(name) + " must be an integer in " + std::to_string(lo) + ".." + std::to_string(hi) +
+               ", got '" + *v + "'";
+      dst = static_cast<int>(*n);
+      return std::nullopt;
+    };
+    auto takeString = [&](std::string& dst) -> std::optional<std::string> {
+      auto v = takeValue();
+      if (!v || v->empty()) return std::string(name) + " needs a non-empty value";
+      dst = *v;
+      return std::nullopt;
+    };
+
+    std::optional<std::string> err;
+    if (name == "--port")
+      err = takeInt(0, 65535, config.port);
+    else if (name == "--host")
+      err = takeString(config.host);
+    else if (name == "--root")
+      err = takeString(config.root);
+    else if (name == "--data-dir")
+      err = takeString(config.dataDir);
+    else if (name == "--device")
+      err = takeString(config.deviceName);
+    else if (name == "--threads")
+      err = takeInt(2, 1024, config.threads);
+    else if (name == "--idle-timeout")
+      err = takeInt(1, 24 * 3600, config.idleTimeoutSec);
+    else
+      err = "unknown option '" + std::string(arg) + "'";
+    if (err) return fail(*err + "\n" + usageText(argv[0]));
+  }
+  ParseOutcome out;
+  out.config = config;
+  return out;
+}
+
+}  // namespace brdfa::server

@@ -1,0 +1,61 @@
+#include "brdfa_server/http_server.h"
+
+#include <httplib.h>
+
+#include "brdfa_server/request_body.h"
+#include "brdfa_server/service.h"
+#include "routes.h"
+
+namespace brdfa::server {
+
+HttpServer::~HttpServer() {
+  stop();
+  // The worker threads are gone once run() returned; the listener before the service.
+  http_.reset();
+  service_.reset();
+}
+
+Result<std::unique_ptr<HttpServer>> HttpServer::create(const ServerConfig& config, std::vector<std::string>& log) {
+  Result<std::unique_ptr<Service>> service = Service::create(config, log);
+  if (!service) return service.takeError();
+  std::unique_ptr<HttpServer> out(new HttpServer());
+  out->config_ = config;
+  out->service_ = std::move(service.value());
+  out->http_ = std::make_unique<httplib::Server>();
+  httplib::Server& http = *out->http_;
+
+  // Every stream client holds one worker for as long as it watches.
+  size_t threads = static_cast<size_t>(config.threads);
+  http.new_task_queue = [threads] { return new httplib::ThreadPool(threads); };
+  http.set_payload_max_length(kMaxJsonBody);
+  // Short keep-alive: idle browser connections otherwise hold shutdown for the full timeout.
+  http.set_keep_alive_timeout(2);
+
+  Service& s = *out->service_;
+  registerSystemRoutes(http, s);
+  registerBrdfRoutes(http, s);
+  registerSessionRoutes(http, s);
+  registerRenderRoutes(http, s);
+  registerStaticRoutes(http, s);
+  return out;
+}
+
+Result<int> HttpServer::bind() {
+  int port = config_.port;
+  if (port == 0) {
+    port = http_->bind_to_any_port(config_.host);
+    if (port <= 0) return makeError(ErrorCode::InvalidArgument, "cannot bind " + config_.host + " on any port");
+  } else if (!http_->bind_to_port(config_.host, port)) {
+    return makeError(ErrorCode::InvalidArgument, "cannot bind " + config_.host + ":" + std::to_string(port));
+  }
+  return port;
+}
+
+bool HttpServer::run() { return http_->listen_after_bind(); }
+
+void HttpServer::stop() {
+  if (service_) service_->beginShutdown();
+  if (http_) http_->stop();
+}
+
+}  // namespace brdfa::server

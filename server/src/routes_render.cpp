@@ -1,0 +1,140 @@
+// POST /api/render: one-shot, stateless. Body either {"scene": {...}, "spp": N, "format": ...,
+// "brdf_source": ...} or the scene's own fields at the top level next to those keys.
+#include <cmath>
+
+#include "brdfa/image_codec.h"
+#include "brdfa_server/http_errors.h"
+#include "brdfa_server/request_body.h"
+#include "routes.h"
+
+namespace brdfa::server {
+
+namespace {
+
+constexpr int kDefaultOneShotSpp = 64;
+// Samples per pass when the request does not choose: fewer passes cost less overhead, and a
+// bounded pass keeps one dispatch short on a GPU with a watchdog.
+constexpr int kOneShotSamplesPerPass = 32;
+
+const char* kRequestKeys[] = {"scene", "spp", "format", "brdf_source"};
+
+bool isRequestKey(const std::string& key) {
+  for (const char* k : kRequestKeys)
+    if (key == k) return true;
+  return false;
+}
+
+Result<int> readSpp(const nlohmann::json& v) {
+  auto bad = [] {
+    return makeError(ErrorCode::InvalidArgument,
+                     "spp must be an integer in [1, " + std::to_string(kMaxOneShotSpp) + "]", "spp");
+  };
+  if (!v.is_number()) return bad();
+  if (v.is_number_unsigned() || v.is_number_integer()) {
+    long long n = v.is_number_unsigned()
+                      ? static_cast<long long>(std::min<unsigned long long>(v.get<unsigned long long>(), 1ull << 62))
+                      : v.get<long long>();
+    if (n < 1 || n > kMaxOneShotSpp) return bad();
+    return static_cast<int>(n);
+  }
+  double d = v.get<double>();
+  if (!std::isfinite(d) || d != std::floor(d) || d < 1 || d > kMaxOneShotSpp) return bad();
+  return static_cast<int>(d);
+}
+
+}  // namespace
+
+void registerRenderRoutes(httplib::Server& server, Service& service) {
+  server.Post("/api/render", [&service](const httplib::Request& req, httplib::Response& res) {
+    auto parsed = readJsonBody(req, res);
+    if (!parsed) return;
+    const nlohmann::json& body = *parsed;
+    if (!body.is_object())
+      return sendError(res, 400, "invalid_argument",
+                       "the body must be a JSON object (a scene plus spp, format, brdf_source)");
+
+    // Which form: a nested "scene" object, or the scene's fields inline.
+    nlohmann::json sceneJson = nlohmann::json::object();
+    if (auto it = body.find("scene"); it != body.end()) {
+      for (auto kv = body.begin(); kv != body.end(); ++kv)
+        if (!isRequestKey(kv.key()))
+          return sendError(res, 400, "invalid_argument",
+                           "unknown key '" + kv.key() + "' (with \"scene\" given, scene fields belong inside it)",
+                           kv.key());
+      sceneJson = *it;
+      if (!sceneJson.is_object())
+        return sendError(res, 400, "invalid_argument", "scene must be a JSON object", "scene");
+    } else {
+      for (auto kv = body.begin(); kv != body.end(); ++kv)
+        if (!isRequestKey(kv.key())) sceneJson[kv.key()] = kv.value();
+    }
+
+    int spp = kDefaultOneShotSpp;
+    if (auto it = body.find("spp"); it != body.end()) {
+      Result<int> r = readSpp(*it);
+      if (!r) return sendError(res, r.error());
+      spp = r.value();
+    }
+    std::string format = "png";
+    if (auto it = body.find("format"); it != body.end()) {
+      if (!it->is_string() || (*it != "png" && *it != "pfm"))
+        return sendError(res, 400, "invalid_argument", "format must be \"png\" or \"pfm\"", "format");
+      format = it->get<std::string>();
+    }
+    std::shared_ptr<const BrdfDefinition> inlineBrdf;
+    if (auto it = body.find("brdf_source"); it != body.end()) {
+      if (!it->is_string())
+        return sendError(res, 400, "invalid_argument", "brdf_source must be a string", "brdf_source");
+      const std::string& text = it->get_ref<const std::string&>();
+      if (text.size() > kMaxBrdfSource)
+        return sendError(res, 413, "payload_too_large",
+                         "brdf_source is larger than " + std::to_string(kMaxBrdfSource) + " bytes", "brdf_source");
+      Result<BrdfDefinition> def = parseBrdf(text);
+      if (!def) return sendError(res, def.error());
+      inlineBrdf = std::make_shared<const BrdfDefinition>(std::move(def.value()));
+    }
+
+    bool spfGiven = sceneJson.contains("render") && sceneJson["render"].is_object() &&
+                    sceneJson["render"].contains("samples_per_frame");
+    Result<Scene> sceneResult = sceneFromJson(sceneJson, service.resolver(inlineBrdf));
+    if (!sceneResult) return sendError(res, sceneResult.error());
+    Scene scene = std::move(sceneResult.value());
+    scene.render.maxSamples = spp;
+    if (!spfGiven) scene.render.samplesPerFrame = std::min(spp, kOneShotSamplesPerPass);
+
+    // Bounded concurrency: renders share one device; a queue longer than the wait is refused.
+    if (!service.renderSlots.acquire(kRenderSlotWait))
+      return sendError(res, 503, "busy",
+                       service.stopping ? "server is shutting down" : "too many renders in progress; retry later");
+    struct SlotGuard {
+      RenderSlots& slots;
+      ~SlotGuard() { slots.release(); }
+    } guard{service.renderSlots};
+
+    Result<std::unique_ptr<RenderView>> view = service.renderer->createView();
+    if (!view) return sendError(res, view.error());
+    RenderView& v = *view.value();
+    if (Result<void> applied = v.setScene(scene); !applied) return sendError(res, applied.error());
+    // Every pass adds at least one sample, so spp passes suffice; more means the renderer never
+    // reports convergence, which must not turn into an endless loop on a worker thread.
+    for (int passes = 0;; ++passes) {
+      if (service.stopping) return sendError(res, 503, "unavailable", "server is shutting down");
+      if (passes > spp)
+        return sendError(res, 500, "internal", "renderer did not converge after " + std::to_string(passes) + " passes");
+      Result<FrameStats> pass = v.renderPass();
+      if (!pass) return sendError(res, pass.error());
+      if (pass.value().converged) break;
+    }
+    bool pfm = format == "pfm";
+    Result<Frame> frame = v.readFrame(pfm);
+    if (!frame) return sendError(res, frame.error());
+    const Frame& f = frame.value();
+    std::vector<uint8_t> bytes =
+        pfm ? encodePfm(f.rgba32f.data(), f.width, f.height) : encodePng(f.rgba8.data(), f.width, f.height);
+    setFrameHeaders(res, f.stats);
+    res.set_content(reinterpret_cast<const char*>(bytes.data()), bytes.size(),
+                    pfm ? "application/x-portable-floatmap" : "image/png");
+  });
+}
+
+}  // namespace brdfa::server

@@ -1,0 +1,293 @@
+// Interactive sessions: create/list/delete, scene get/put/patch, frames, the PNG stream, stats.
+#include <charconv>
+#include <cmath>
+
+#include "brdfa/image_codec.h"
+#include "brdfa_server/http_errors.h"
+#include "brdfa_server/request_body.h"
+#include "routes.h"
+
+namespace brdfa::server {
+
+namespace {
+
+using namespace std::chrono_literals;
+
+nlohmann::json statsToJson(const FrameStats& s, const std::optional<Error>& renderError) {
+  nlohmann::json out{{"spp", s.spp},
+                     {"elapsed_ms", s.elapsedMs},
+                     {"ms_per_frame", s.lastPassMs},
+                     // Passes per second at the latest pass's pace (a pass is one progressive frame).
+                     {"fps", s.lastPassMs > 0 ? 1000.0 / s.lastPassMs : 0.0},
+                     {"vertices", s.vertices},
+                     {"triangles", s.triangles},
+                     {"rel_error", nullptr},
+                     {"nan_samples", s.nanSamples},
+                     {"passes", s.passes},
+                     {"converged", s.converged},
+                     {"scene_version", s.sceneVersion}};
+  if (s.relError && std::isfinite(*s.relError)) out["rel_error"] = *s.relError;
+  if (renderError) out["error"] = {{"error", errorName(renderError->code)}, {"message", renderError->message}};
+  return out;
+}
+
+// Finds the session named in the path (running a pending default scene first), or answers 404.
+std::shared_ptr<Session> sessionOr404(Service& service, const httplib::Request& req, httplib::Response& res,
+                                      bool initialize = true) {
+  std::string id = req.matches[1];
+  auto session = service.sessions->find(id);
+  if (!session) {
+    sendError(res, 404, "not_found", "no session '" + id + "'", "session");
+    return nullptr;
+  }
+  if (initialize) session->ensureInitialized();
+  return session;
+}
+
+bool requireScene(Session& session, httplib::Response& res) {
+  if (session.hasScene()) return true;
+  sendError(res, 409, "no_scene", "session '" + session.id() + "' has no scene yet; PUT one first");
+  return false;
+}
+
+// Validates `json` and applies it under the held update lock; answers with the full scene.
+void applySceneJson(Service& service, Session& session, std::unique_lock<std::mutex>& lock, const nlohmann::json& json,
+                    httplib::Response& res) {
+  Result<Scene> scene = sceneFromJson(json, service.resolver());
+  if (!scene) return sendError(res, scene.error());
+  nlohmann::json full = sceneToJson(scene.value());
+  Result<void> applied = session.applyScene(lock, scene.value(), full);
+  if (!applied) return sendError(res, applied.error());
+  sendJson(res, full);
+}
+
+// ?min_spp=N: a non-negative integer; values beyond 64 bits saturate (max_samples caps them).
+std::optional<uint64_t> parseMinSpp(const std::string& text) {
+  if (text.empty() || text.size() > 40) return std::nullopt;
+  uint64_t v = 0;
+  auto [ptr, ec] = std::from_chars(text.data(), text.data() + text.size(), v);
+  if (ptr != text.data() + text.size()) return std::nullopt;
+  if (ec == std::errc::result_out_of_range) return UINT64_MAX;
+  if (ec != std::errc()) return std::nullopt;
+  return v;
+}
+
+struct StreamState {
+  uint64_t lastSeq = 0;
+  Session::Clock::time_point lastSent = Session::Clock::now();
+};
+
+// One call of the stream's content provider: sends the next part when there is a newer frame,
+// ends the body when the session or server stops, else returns after a short wait (httplib
+// checks for server shutdown between calls). false drops the client.
+bool writeNextPart(Service& service, Session& session, StreamState& state, httplib::DataSink& sink) {
+  auto finished = [&] { return service.stopping.load() || session.stopped(); };
+  if (finished()) {
+    sink.done();
+    return true;
+  }
+  std::optional<StreamFrame> frame = session.waitForStreamFrame(state.lastSeq, 250ms);
+  if (!frame) {
+    if (finished()) {
+      sink.done();
+      return true;
+    }
+    // Nothing new (converged or idle). Resend the last frame now and then: the write is how a
+    // client that went away is noticed, freeing its worker thread.
+    if (Session::Clock::now() - state.lastSent < 10s) return true;
+    frame = session.latestStreamFrame();
+    if (!frame) return true;
+  }
+  const std::vector<uint8_t>& png = *frame->png;
+  std::string head = "--frame\r\nContent-Type: image/png\r\nContent-Length: " + std::to_string(png.size()) +
+                     "\r\nX-Samples: " + std::to_string(frame->spp) + "\r\n\r\n";
+  if (!sink.write(head.data(), head.size())) return false;
+  if (!sink.write(reinterpret_cast<const char*>(png.data()), png.size())) return false;
+  if (!sink.write("\r\n", 2)) return false;
+  state.lastSeq = frame->seq;
+  state.lastSent = Session::Clock::now();
+  return true;
+}
+
+nlohmann::json sessionSummary(Session& s) {
+  return {{"id", s.id()}, {"stats", statsToJson(s.stats(), s.renderError())}, {"stream_clients", s.streamClients()}};
+}
+
+}  // namespace
+
+void registerSessionRoutes(httplib::Server& server, Service& service) {
+  server.Get("/api/sessions", [&service](const httplib::Request&, httplib::Response& res) {
+    nlohmann::json list = nlohmann::json::array();
+    for (auto& s : service.sessions->list()) list.push_back(sessionSummary(*s));
+    sendJson(res, list);
+  });
+
+  server.Post("/api/sessions", [&service](const httplib::Request& req, httplib::Response& res) {
+    nlohmann::json body = nlohmann::json::object();
+    if (!req.body.empty()) {
+      auto parsed = readJsonBody(req, res);
+      if (!parsed) return;
+      body = std::move(*parsed);
+    }
+    // Validated before the session exists, so a bad scene leaves nothing behind.
+    Result<Scene> scene = sceneFromJson(body, service.resolver());
+    if (!scene) return sendError(res, scene.error());
+    SessionManager::Created created = service.sessions->create();
+    if (created.full)
+      return sendError(res, 429, "too_many_sessions",
+                       "at most " + std::to_string(service.sessions->maxSessions()) + " sessions; delete one first");
+    if (!created.session) return sendError(res, *created.error);
+    nlohmann::json full = sceneToJson(scene.value());
+    {
+      auto lock = created.session->beginSceneUpdate(false);
+      Result<void> applied = created.session->applyScene(lock, scene.value(), full);
+      if (!applied) {
+        lock.unlock();
+        service.sessions->remove(created.session->id());
+        return sendError(res, applied.error());
+      }
+    }
+    res.set_header("Location", "/api/sessions/" + created.session->id());
+    sendJson(res, {{"id", created.session->id()}, {"scene", full}}, 201);
+  });
+
+  server.Get("/api/sessions/([^/]+)", [&service](const httplib::Request& req, httplib::Response& res) {
+    auto session = sessionOr404(service, req, res);
+    if (!session) return;
+    nlohmann::json body = sessionSummary(*session);
+    body["scene"] = session->sceneJson();
+    sendJson(res, body);
+  });
+
+  server.Delete("/api/sessions/([^/]+)", [&service](const httplib::Request& req, httplib::Response& res) {
+    std::string id = req.matches[1];
+    switch (service.sessions->remove(id)) {
+      case SessionManager::RemoveOutcome::Removed:
+        res.status = 204;
+        return;
+      case SessionManager::RemoveOutcome::NotFound:
+        return sendError(res, 404, "not_found", "no session '" + id + "'", "session");
+      case SessionManager::RemoveOutcome::Protected:
+        return sendError(res, 409, "conflict", "the default session cannot be deleted", "session");
+    }
+  });
+
+  server.Get("/api/sessions/([^/]+)/scene", [&service](const httplib::Request& req, httplib::Response& res) {
+    auto session = sessionOr404(service, req, res);
+    if (!session || !requireScene(*session, res)) return;
+    sendJson(res, session->sceneJson());
+  });
+
+  server.Put("/api/sessions/([^/]+)/scene", [&service](const httplib::Request& req, httplib::Response& res) {
+    auto session = sessionOr404(service, req, res, /*initialize=*/false);
+    if (!session) return;
+    auto body = readJsonBody(req, res);
+    if (!body) return;
+    auto lock = session->beginSceneUpdate(false);  // replaced anyway: no need for the default
+    applySceneJson(service, *session, lock, *body, res);
+  });
+
+  // RFC 7386 JSON merge patch onto the current (full) scene JSON, then validated as a whole.
+  // Arrays are replaced, not merged: to change one object, send the whole "objects" array.
+  server.Patch("/api/sessions/([^/]+)/scene", [&service](const httplib::Request& req, httplib::Response& res) {
+    auto session = sessionOr404(service, req, res, /*initialize=*/false);
+    if (!session) return;
+    auto patch = readJsonBody(req, res);
+    if (!patch) return;
+    auto lock = session->beginSceneUpdate(true);
+    nlohmann::json merged = session->sceneJson();
+    if (merged.is_null()) merged = nlohmann::json::object();
+    merged.merge_patch(*patch);
+    applySceneJson(service, *session, lock, merged, res);
+  });
+
+  server.Get("/api/sessions/([^/]+)/stats", [&service](const httplib::Request& req, httplib::Response& res) {
+    auto session = sessionOr404(service, req, res);
+    if (!session) return;
+    session->touch();  // a client polling stats is watching
+    sendJson(res, statsToJson(session->stats(), session->renderError()));
+  });
+
+  server.Get("/api/sessions/([^/]+)/frame", [&service](const httplib::Request& req, httplib::Response& res) {
+    std::string format = req.has_param("format") ? req.get_param_value("format") : "png";
+    if (format != "png" && format != "pfm")
+      return sendError(res, 400, "invalid_argument", "format must be png or pfm", "format");
+    // Default 1: "the latest frame" always has at least one sample in it (not a black image
+    // right after a scene change). min_spp=0 answers at once with whatever there is.
+    uint64_t minSpp = 1;
+    if (req.has_param("min_spp")) {
+      auto parsed = parseMinSpp(req.get_param_value("min_spp"));
+      if (!parsed) return sendError(res, 400, "invalid_argument", "min_spp must be a non-negative integer", "min_spp");
+      minSpp = *parsed;
+    }
+    auto session = sessionOr404(service, req, res);
+    if (!session) return;
+    session->touch();
+    if (!requireScene(*session, res)) return;
+    // Only waits that can last hold a worker; an answer available now never counts.
+    Session::WaitOutcome outcome = Session::WaitOutcome::Reached;
+    if (minSpp > 0) {
+      if (service.frameWaiters.fetch_add(1) >= service.maxFrameWaiters) {
+        service.frameWaiters.fetch_sub(1);
+        return sendError(res, 503, "busy",
+                         "too many requests waiting for samples (at most " + std::to_string(service.maxFrameWaiters) +
+                             "); retry later or without min_spp");
+      }
+      outcome = session->waitForSamples(minSpp, kFrameWait);
+      service.frameWaiters.fetch_sub(1);
+    }
+    switch (outcome) {
+      case Session::WaitOutcome::Stopped:
+        return sendError(res, 503, "unavailable", "the session was stopped (deleted, or the server is shutting down)");
+      case Session::WaitOutcome::Failed:
+        if (auto err = session->renderError()) return sendError(res, *err);
+        break;
+      case Session::WaitOutcome::Reached:
+      case Session::WaitOutcome::TimedOut:  // bounded wait: answer with what there is
+        break;
+    }
+    bool pfm = format == "pfm";
+    Result<Frame> frame = session->readFrame(pfm);
+    if (!frame) return sendError(res, frame.error());
+    const Frame& f = frame.value();
+    std::vector<uint8_t> bytes =
+        pfm ? encodePfm(f.rgba32f.data(), f.width, f.height) : encodePng(f.rgba8.data(), f.width, f.height);
+    setFrameHeaders(res, f.stats);
+    res.set_content(reinterpret_cast<const char*>(bytes.data()), bytes.size(),
+                    pfm ? "application/x-portable-floatmap" : "image/png");
+  });
+
+  // multipart/x-mixed-replace: each part is one PNG. The render thread publishes at most ~30
+  // frames/s (and always the converged one); each client sends the latest when it is newer
+  // than what it sent last, so a slow client skips frames and never holds up rendering.
+  server.Get("/api/sessions/([^/]+)/stream", [&service](const httplib::Request& req, httplib::Response& res) {
+    auto session = sessionOr404(service, req, res);
+    if (!session) return;
+    if (service.activeStreams.fetch_add(1) >= service.maxStreams) {
+      service.activeStreams.fetch_sub(1);
+      return sendError(res, 503, "too_many_streams",
+                       "at most " + std::to_string(service.maxStreams) + " concurrent streams");
+    }
+    session->addStreamClient();
+    auto state = std::make_shared<StreamState>();
+    res.set_header("Cache-Control", "no-store");
+    // Chunked: HTTP/1.1 framing with an explicit end when the stream stops (server shutdown,
+    // session deleted), instead of a body that ends only when the connection closes.
+    res.set_chunked_content_provider(
+        "multipart/x-mixed-replace; boundary=frame",
+        [&service, session, state](size_t, httplib::DataSink& sink) -> bool {
+          // Runs outside httplib's handler try/catch: an exception here would end the process.
+          try {
+            return writeNextPart(service, *session, *state, sink);
+          } catch (const std::exception&) {
+            return false;  // drops this client; the session and other clients go on
+          }
+        },
+        [&service, session](bool) {
+          session->removeStreamClient();
+          service.activeStreams.fetch_sub(1);
+        });
+  });
+}
+
+}  // namespace brdfa::server

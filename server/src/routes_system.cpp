@@ -1,0 +1,95 @@
+// Health, the request-body helpers, and the handlers that make sure no failure reaches a
+// client as a dropped connection or an HTML page.
+#include <cstdio>
+
+#include "brdfa_server/http_errors.h"
+#include "brdfa_server/request_body.h"
+#include "routes.h"
+
+namespace brdfa::server {
+
+std::optional<nlohmann::json> readJsonBody(const httplib::Request& req, httplib::Response& res) {
+  if (req.body.size() > kMaxJsonBody) {
+    sendError(res, 413, "payload_too_large", "request body is larger than " + std::to_string(kMaxJsonBody) + " bytes");
+    return std::nullopt;
+  }
+  JsonBody parsed = parseJsonBody(req.body);
+  if (!parsed.ok) {
+    sendError(res, 400, "bad_json", parsed.message);
+    return std::nullopt;
+  }
+  return std::move(parsed.value);
+}
+
+std::optional<std::string> readBrdfTextBody(const httplib::Request& req, httplib::Response& res) {
+  if (req.body.size() > kMaxBrdfSource) {
+    sendError(res, 413, "payload_too_large", ".brdf text is larger than " + std::to_string(kMaxBrdfSource) + " bytes");
+    return std::nullopt;
+  }
+  if (req.body.empty()) {
+    sendError(res, 400, "invalid_argument", "the request body must be the .brdf text", "body");
+    return std::nullopt;
+  }
+  return req.body;
+}
+
+void setFrameHeaders(httplib::Response& res, const FrameStats& stats) {
+  res.set_header("X-Samples", std::to_string(stats.spp));
+  char ms[32];
+  std::snprintf(ms, sizeof(ms), "%.3f", stats.elapsedMs);
+  res.set_header("X-Render-Ms", ms);
+  res.set_header("X-Nan-Samples", std::to_string(stats.nanSamples));
+  res.set_header("X-Scene-Version", std::to_string(stats.sceneVersion));
+  res.set_header("Cache-Control", "no-store");
+}
+
+void registerSystemRoutes(httplib::Server& server, Service& service) {
+  // Responses httplib makes by itself (unknown route, 413, 414, ...) get the JSON error body;
+  // responses a handler already filled pass through untouched.
+  server.set_error_handler(
+      httplib::Server::HandlerWithResponse([](const httplib::Request& req, httplib::Response& res) {
+        if (!res.body.empty() || res.content_provider_) return httplib::Server::HandlerResponse::Unhandled;
+        std::string message;
+        switch (res.status) {
+          case 404:
+            message = "no such resource: " + req.method + " " + req.path;
+            break;
+          case 413:
+            message = "request body is larger than " + std::to_string(kMaxJsonBody) + " bytes";
+            break;
+          default:
+            message = "HTTP " + std::to_string(res.status) + " for " + req.method + " " + req.path;
+            break;
+        }
+        sendError(res, res.status, errorNameForStatus(res.status), message);
+        return httplib::Server::HandlerResponse::Handled;
+      }));
+
+  // A handler that throws (a bug, or std::bad_alloc) still answers with JSON.
+  server.set_exception_handler([](const httplib::Request& req, httplib::Response& res, std::exception_ptr ep) {
+    std::string what = "unknown exception";
+    try {
+      if (ep) std::rethrow_exception(ep);
+    } catch (const std::exception& e) {
+      what = e.what();
+    } catch (...) {
+    }
+    std::fprintf(stderr, "error: %s %s threw: %s\n", req.method.c_str(), req.path.c_str(), what.c_str());
+    sendError(res, 500, "internal", "internal error: " + what);
+  });
+
+  server.set_logger([](const httplib::Request& req, const httplib::Response& res) {
+    std::fprintf(stderr, "%s %s -> %d\n", req.method.c_str(), req.path.c_str(), res.status);
+  });
+
+  server.Get("/api/health", [&service](const httplib::Request&, httplib::Response& res) {
+    const DeviceInfo& d = service.renderer->device();
+    sendJson(res,
+             {{"status", "ok"},
+              {"device", {{"name", d.name}, {"type", d.type}, {"driver", d.driver}, {"api_version", d.apiVersion}}},
+              {"sessions", service.sessions->list().size()},
+              {"streams", service.activeStreams.load()}});
+  });
+}
+
+}  // namespace brdfa::server

@@ -1,0 +1,112 @@
+#include "brdfa_server/service.h"
+
+#include <algorithm>
+#include <cstdio>
+#include <filesystem>
+
+namespace brdfa::server {
+
+bool RenderSlots::acquire(std::chrono::milliseconds timeout) {
+  std::unique_lock lock(mutex_);
+  if (free_ == 0 && waiting_ >= maxWaiting_) return false;
+  ++waiting_;
+  bool got = cv_.wait_for(lock, timeout, [&] { return shutdown_ || free_ > 0; });
+  --waiting_;
+  if (!got || shutdown_) return false;
+  --free_;
+  return true;
+}
+
+void RenderSlots::release() {
+  {
+    std::lock_guard lock(mutex_);
+    ++free_;
+  }
+  cv_.notify_one();
+}
+
+void RenderSlots::shutdown() {
+  {
+    std::lock_guard lock(mutex_);
+    shutdown_ = true;
+  }
+  cv_.notify_all();
+}
+
+nlohmann::json defaultSessionSceneJson() {
+  return {{"environment", {{"name", "sky"}, {"visible", true}}},
+          {"objects", nlohmann::json::array({{{"mesh", "sphere"}, {"brdf", "ggx"}}})},
+          {"render", {{"width", 512}, {"height", 512}, {"samples_per_frame", 4}, {"max_samples", 4096}}}};
+}
+
+namespace {
+
+// Applies `json` to the session; returns the error message on failure.
+std::optional<std::string> tryApply(Service& service, Session& session, std::unique_lock<std::mutex>& lock,
+                                    const nlohmann::json& json) {
+  Result<Scene> scene = sceneFromJson(json, service.resolver());
+  if (!scene) return scene.error().message;
+  Result<void> applied = session.applyScene(lock, scene.value(), sceneToJson(scene.value()));
+  if (!applied) return applied.error().message;
+  return std::nullopt;
+}
+
+}  // namespace
+
+Result<std::unique_ptr<Service>> Service::create(const ServerConfig& config, std::vector<std::string>& log) {
+  auto service = std::make_unique<Service>();
+  service->config = config;
+  service->maxStreams = std::max(1, std::min(kMaxStreams, config.threads * 3 / 4));
+  service->maxFrameWaiters = std::max(1, config.threads / 4);
+
+  std::error_code ec;
+  std::filesystem::create_directories(config.dataDir, ec);
+  if (ec) log.push_back("warning: cannot create data directory " + config.dataDir + ": " + ec.message());
+
+  RendererOptions options;
+  options.deviceName = config.deviceName;
+  options.shaderDir = (std::filesystem::path(config.root) / "shaders").string();
+  Result<std::shared_ptr<Renderer>> renderer = Renderer::create(options);
+  if (!renderer) return renderer.takeError();
+  service->renderer = std::move(renderer.value());
+
+  for (std::string& msg :
+       service->library.loadBuiltins((std::filesystem::path(config.root) / "shaders" / "brdfs").string()))
+    log.push_back("warning: " + msg);
+
+  service->sessions = std::make_unique<SessionManager>(
+      service->renderer, std::chrono::milliseconds(std::chrono::seconds(config.idleTimeoutSec)), kMaxSessions);
+  SessionManager::Created created = service->sessions->create(kDefaultSessionId);
+  if (!created.session) {
+    return makeError(created.error ? created.error->code : ErrorCode::Internal,
+                     "cannot create the default session: " + (created.error ? created.error->message : "session cap"));
+  }
+  // Deferred so start-up compiles nothing. If the sky or GGX is missing (a stripped-down
+  // install), fall back to the all-defaults scene rather than leaving `default` empty.
+  Service* raw = service.get();
+  created.session->setInitializer([raw](Session& session, std::unique_lock<std::mutex>& lock) {
+    auto err = tryApply(*raw, session, lock, defaultSessionSceneJson());
+    if (!err) return;
+    std::fprintf(stderr, "warning: default scene not applied (%s); using the built-in defaults\n", err->c_str());
+    if (auto err2 = tryApply(*raw, session, lock, nlohmann::json::object()))
+      std::fprintf(stderr, "warning: default session has no scene: %s\n", err2->c_str());
+  });
+  return service;
+}
+
+SceneResolver Service::resolver(std::shared_ptr<const BrdfDefinition> inlineBrdf) const {
+  SceneResolver r;
+  r.library = &library;
+  r.inlineBrdf = std::move(inlineBrdf);
+  r.environments = renderer->environmentNames();
+  r.meshes = renderer->meshNames();
+  return r;
+}
+
+void Service::beginShutdown() {
+  stopping = true;
+  renderSlots.shutdown();
+  if (sessions) sessions->stopAll();
+}
+
+}  // namespace brdfa::server

@@ -1,0 +1,287 @@
+#include "brdfa_server/session.h"
+
+#include <cstdio>
+
+#include "brdfa/image_codec.h"
+
+namespace brdfa::server {
+
+Session::Session(std::string id, std::unique_ptr<RenderView> view, std::chrono::milliseconds idleTimeout)
+    : id_(std::move(id)), view_(std::move(view)), idleTimeout_(idleTimeout) {
+  thread_ = std::thread([this] { guarded(&Session::renderLoop); });
+  encoder_ = std::thread([this] { guarded(&Session::encodeLoop); });
+}
+
+Session::~Session() { stop(); }
+
+void Session::guarded(void (Session::*loop)()) {
+  // An exception escaping a thread would terminate the whole server. The loops return only
+  // when stopping, so after a failure (std::bad_alloc, a bug) the session records the error,
+  // which stops rendering until the next scene, and the loop resumes.
+  for (;;) {
+    try {
+      (this->*loop)();
+      return;
+    } catch (const std::exception& e) {
+      std::fprintf(stderr, "session %s: worker thread error: %s\n", id_.c_str(), e.what());
+      std::lock_guard lock(mutex_);
+      renderError_ = makeError(ErrorCode::Internal, std::string("render thread failed: ") + e.what());
+      pendingRaw_.reset();
+    }
+    progress_.notify_all();
+    frames_.notify_all();
+  }
+}
+
+template <class F>
+auto Session::withViewPriority(F&& call) -> decltype(call()) {
+  {
+    std::lock_guard lock(mutex_);
+    ++pendingViewCalls_;
+  }
+  struct Done {
+    Session& s;
+    ~Done() {
+      {
+        std::lock_guard lock(s.mutex_);
+        --s.pendingViewCalls_;
+      }
+      s.wake_.notify_all();
+    }
+  } done{*this};
+  return call();
+}
+
+void Session::setInitializer(std::function<void(Session&, std::unique_lock<std::mutex>&)> init) {
+  std::lock_guard lock(sceneUpdateMutex_);
+  initializer_ = std::move(init);
+  initPending_ = static_cast<bool>(initializer_);
+}
+
+void Session::ensureInitialized() {
+  if (initPending_.load()) beginSceneUpdate(true);
+}
+
+std::unique_lock<std::mutex> Session::beginSceneUpdate(bool runInitializer) {
+  std::unique_lock lock(sceneUpdateMutex_);
+  if (runInitializer && initializer_) {
+    // Moved out first: it runs once even if it fails to apply a scene.
+    auto init = std::move(initializer_);
+    initializer_ = nullptr;
+    initPending_ = false;
+    init(*this, lock);
+  }
+  return lock;
+}
+
+Result<void> Session::applyScene(std::unique_lock<std::mutex>& updateLock, const Scene& scene,
+                                 nlohmann::json sceneJson) {
+  if (!updateLock.owns_lock() || updateLock.mutex() != &sceneUpdateMutex_)
+    return makeError(ErrorCode::Internal, "applyScene called without the scene update lock");
+  // Called outside mutex_: setScene may compile for a while and must not stall stats or
+  // streams. The view serializes it against the render thread's passes.
+  Result<void> applied = withViewPriority([&] { return view_->setScene(scene); });
+  if (!applied) return applied;
+  initializer_ = nullptr;  // an explicit scene supersedes a pending default
+  initPending_ = false;
+  FrameStats fresh = withViewPriority([&] { return view_->stats(); });
+  {
+    std::lock_guard lock(mutex_);
+    hasScene_ = true;
+    sceneJson_ = std::move(sceneJson);
+    maxSamples_ = scene.render.maxSamples;
+    stats_ = fresh;
+    renderError_.reset();
+    publishRequested_ = true;
+    // The old scene's frame must not reach a stream client that connects now; seq is kept so
+    // clients already streaming still see the next frame as newer.
+    latest_.png.reset();
+    pendingRaw_.reset();
+  }
+  wake_.notify_all();
+  progress_.notify_all();
+  return {};
+}
+
+bool Session::hasScene() const {
+  std::lock_guard lock(mutex_);
+  return hasScene_;
+}
+
+nlohmann::json Session::sceneJson() const {
+  std::lock_guard lock(mutex_);
+  return sceneJson_;
+}
+
+void Session::touch() {
+  {
+    std::lock_guard lock(mutex_);
+    watchedUntil_ = std::max(watchedUntil_, Clock::now() + idleTimeout_);
+  }
+  wake_.notify_all();
+}
+
+FrameStats Session::stats() const {
+  std::lock_guard lock(mutex_);
+  return stats_;
+}
+
+std::optional<Error> Session::renderError() const {
+  std::lock_guard lock(mutex_);
+  return renderError_;
+}
+
+bool Session::watchedLocked(Clock::time_point now) const {
+  return streamClients_ > 0 || waiters_ > 0 || now < watchedUntil_;
+}
+
+Session::WaitOutcome Session::waitForSamples(uint64_t minSpp, std::chrono::milliseconds timeout) {
+  std::unique_lock lock(mutex_);
+  ++waiters_;
+  wake_.notify_all();
+  auto reached = [&] {
+    if (stopping_ || renderError_) return true;
+    uint64_t target = std::min<uint64_t>(minSpp, static_cast<uint64_t>(std::max(maxSamples_, 0)));
+    return hasScene_ && (stats_.spp >= target || stats_.converged);
+  };
+  progress_.wait_for(lock, timeout, reached);
+  --waiters_;
+  // The client that waited is likely to ask again soon; keep rendering meanwhile.
+  watchedUntil_ = std::max(watchedUntil_, Clock::now() + idleTimeout_);
+  if (stopping_) return WaitOutcome::Stopped;
+  if (renderError_) return WaitOutcome::Failed;
+  return reached() ? WaitOutcome::Reached : WaitOutcome::TimedOut;
+}
+
+Result<Frame> Session::readFrame(bool linear) {
+  return withViewPriority([&] { return view_->readFrame(linear); });
+}
+
+void Session::addStreamClient() {
+  {
+    std::lock_guard lock(mutex_);
+    ++streamClients_;
+    publishRequested_ = true;  // a new client of a converged session still gets a frame
+  }
+  wake_.notify_all();
+}
+
+void Session::removeStreamClient() {
+  std::lock_guard lock(mutex_);
+  --streamClients_;
+}
+
+int Session::streamClients() const {
+  std::lock_guard lock(mutex_);
+  return streamClients_;
+}
+
+std::optional<StreamFrame> Session::waitForStreamFrame(uint64_t afterSeq, std::chrono::milliseconds timeout) {
+  std::unique_lock lock(mutex_);
+  frames_.wait_for(lock, timeout, [&] { return stopping_ || latest_.seq > afterSeq; });
+  if (stopping_ || latest_.seq <= afterSeq || !latest_.png) return std::nullopt;
+  return latest_;
+}
+
+std::optional<StreamFrame> Session::latestStreamFrame() const {
+  std::lock_guard lock(mutex_);
+  if (!latest_.png) return std::nullopt;
+  return latest_;
+}
+
+void Session::stop() {
+  {
+    std::lock_guard lock(mutex_);
+    stopping_ = true;
+  }
+  wake_.notify_all();
+  progress_.notify_all();
+  frames_.notify_all();
+  encodeWake_.notify_all();
+  std::lock_guard joinLock(joinMutex_);
+  if (thread_.joinable() && thread_.get_id() != std::this_thread::get_id()) thread_.join();
+  if (encoder_.joinable() && encoder_.get_id() != std::this_thread::get_id()) encoder_.join();
+}
+
+bool Session::stopped() const {
+  std::lock_guard lock(mutex_);
+  return stopping_;
+}
+
+void Session::publishFrame(std::unique_lock<std::mutex>& lock) {
+  publishRequested_ = false;
+  lastPublish_ = Clock::now();
+  lock.unlock();
+  Result<Frame> frame = view_->readFrame(false);
+  lock.lock();
+  if (!frame) {
+    std::fprintf(stderr, "session %s: readFrame for stream failed: %s\n", id_.c_str(), frame.error().message.c_str());
+    return;
+  }
+  Frame& f = frame.value();
+  if (f.width <= 0 || f.height <= 0 || f.rgba8.size() < static_cast<size_t>(f.width) * f.height * 4) return;
+  pendingRaw_ = RawFrame{std::move(f.rgba8), f.width, f.height, f.stats.spp, f.stats.sceneVersion};
+  encodeWake_.notify_one();
+}
+
+void Session::encodeLoop() {
+  std::unique_lock lock(mutex_);
+  while (!stopping_) {
+    if (!pendingRaw_) {
+      encodeWake_.wait(lock);
+      continue;
+    }
+    RawFrame raw = std::move(*pendingRaw_);
+    pendingRaw_.reset();
+    lock.unlock();
+    auto png = std::make_shared<const std::vector<uint8_t>>(encodePng(raw.rgba8.data(), raw.width, raw.height));
+    lock.lock();
+    // A scene applied while the frame was read or encoded makes it stale: never show the old
+    // scene after the new one.
+    if (raw.sceneVersion < stats_.sceneVersion) continue;
+    latest_.png = std::move(png);
+    latest_.seq += 1;
+    latest_.spp = raw.spp;
+    frames_.notify_all();
+  }
+}
+
+void Session::renderLoop() {
+  std::unique_lock lock(mutex_);
+  while (!stopping_) {
+    bool canRender = hasScene_ && !renderError_;
+    bool wantPass = canRender && !stats_.converged && watchedLocked(Clock::now()) && pendingViewCalls_ == 0;
+    bool wantPublish = canRender && streamClients_ > 0 && publishRequested_ && stats_.spp > 0 && pendingViewCalls_ == 0;
+    if (!wantPass && !wantPublish) {
+      // Nothing to do until a scene change, a watcher, a stream client or stop. A watched-until
+      // deadline needs no timed wake: it only ever turns rendering off, checked after each pass.
+      wake_.wait(lock);
+      continue;
+    }
+    if (wantPass) {
+      uint64_t versionBefore = stats_.sceneVersion;
+      lock.unlock();
+      Result<FrameStats> pass = view_->renderPass();
+      lock.lock();
+      if (!pass) {
+        // Only an error of the scene still in place counts; a newer scene gets a fresh try.
+        if (stats_.sceneVersion == versionBefore) {
+          std::fprintf(stderr, "session %s: render pass failed: %s\n", id_.c_str(), pass.error().message.c_str());
+          renderError_ = pass.takeError();
+        }
+        progress_.notify_all();
+        frames_.notify_all();
+        continue;
+      }
+      // A pass of a scene that was replaced meanwhile must not overwrite the new scene's stats.
+      if (pass.value().sceneVersion >= stats_.sceneVersion) stats_ = pass.value();
+      progress_.notify_all();
+      bool due = publishRequested_ || stats_.converged || Clock::now() - lastPublish_ >= kPublishInterval;
+      if (streamClients_ > 0 && stats_.spp > 0 && due) publishFrame(lock);
+    } else {
+      publishFrame(lock);
+    }
+  }
+}
+
+}  // namespace brdfa::server

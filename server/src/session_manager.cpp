@@ -1,0 +1,98 @@
+#include "brdfa_server/session_manager.h"
+
+#include <random>
+
+namespace brdfa::server {
+
+SessionManager::SessionManager(std::shared_ptr<Renderer> renderer, std::chrono::milliseconds idleTimeout,
+                               size_t maxSessions)
+    : renderer_(std::move(renderer)), idleTimeout_(idleTimeout), maxSessions_(maxSessions) {}
+
+SessionManager::~SessionManager() { stopAll(); }
+
+std::string SessionManager::randomId() {
+  // Unguessable enough that one student cannot stumble into another's session by counting.
+  static thread_local std::mt19937_64 rng{std::random_device{}()};
+  static const char* hex = "0123456789abcdef";
+  uint64_t bits = rng();
+  std::string id(16, '0');
+  for (int i = 0; i < 16; ++i) id[i] = hex[(bits >> (4 * i)) & 15];
+  return id;
+}
+
+SessionManager::Created SessionManager::create(const std::string& requestedId) {
+  Created out;
+  {
+    std::lock_guard lock(mutex_);
+    if (stopped_) {
+      out.error = makeError(ErrorCode::DeviceError, "server is shutting down");
+      return out;
+    }
+    if (sessions_.size() >= maxSessions_) {
+      out.full = true;
+      return out;
+    }
+  }
+  // createView may allocate device memory; not under the lock.
+  Result<std::unique_ptr<RenderView>> view = renderer_->createView();
+  if (!view) {
+    out.error = view.takeError();
+    return out;
+  }
+  std::lock_guard lock(mutex_);
+  if (stopped_) {
+    out.error = makeError(ErrorCode::DeviceError, "server is shutting down");
+    return out;
+  }
+  // Re-checked: another create may have filled the last slot while the view was made.
+  if (sessions_.size() >= maxSessions_) {
+    out.full = true;
+    return out;
+  }
+  std::string id = requestedId;
+  while (id.empty() || sessions_.count(id)) id = randomId();
+  auto session = std::make_shared<Session>(id, std::move(view.value()), idleTimeout_);
+  sessions_[id] = session;
+  out.session = std::move(session);
+  return out;
+}
+
+std::shared_ptr<Session> SessionManager::find(const std::string& id) const {
+  std::lock_guard lock(mutex_);
+  auto it = sessions_.find(id);
+  return it == sessions_.end() ? nullptr : it->second;
+}
+
+std::vector<std::shared_ptr<Session>> SessionManager::list() const {
+  std::lock_guard lock(mutex_);
+  std::vector<std::shared_ptr<Session>> out;
+  for (const auto& [id, s] : sessions_) out.push_back(s);
+  return out;
+}
+
+SessionManager::RemoveOutcome SessionManager::remove(const std::string& id) {
+  if (id == kDefaultSessionId) return RemoveOutcome::Protected;
+  std::shared_ptr<Session> session;
+  {
+    std::lock_guard lock(mutex_);
+    auto it = sessions_.find(id);
+    if (it == sessions_.end()) return RemoveOutcome::NotFound;
+    session = std::move(it->second);
+    sessions_.erase(it);
+  }
+  // Outside the lock: joining the render thread may wait for one pass.
+  session->stop();
+  return RemoveOutcome::Removed;
+}
+
+void SessionManager::stopAll() {
+  std::vector<std::shared_ptr<Session>> all;
+  {
+    std::lock_guard lock(mutex_);
+    stopped_ = true;
+    for (const auto& [id, s] : sessions_) all.push_back(s);
+  }
+  for (auto& s : all) s->stop();
+}
+
+}  // namespace brdfa::server
