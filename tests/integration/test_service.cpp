@@ -1,0 +1,170 @@
+// The BRDF library over REST, health, static files, and process lifecycle (flags, SIGTERM).
+#include <fcntl.h>
+#include <signal.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <atomic>
+#include <thread>
+
+#include "server_process.h"
+
+namespace brdfa::itest {
+namespace {
+
+using nlohmann::json;
+using Clock = std::chrono::steady_clock;
+
+class Service : public ServerTest {};
+
+TEST_F(Service, HealthDescribesTheDevice) {
+  json h = bodyJson(get("/api/health"));
+  EXPECT_EQ(h["status"], "ok");
+  EXPECT_TRUE(h["device"]["name"].is_string());
+  EXPECT_TRUE(h["device"]["type"] == "cpu" || h["device"]["type"] == "gpu") << h.dump();
+}
+
+TEST_F(Service, BuiltinBrdfsAreListedWithTheirParameters) {
+  auto r = get("/api/brdfs");
+  ASSERT_TRUE(r);
+  ASSERT_EQ(r->status, 200);
+  json list = bodyJson(r);
+  ASSERT_TRUE(list.is_array());
+  json ggx;
+  for (const json& b : list)
+    if (b["name"] == "ggx") ggx = b;
+  ASSERT_TRUE(ggx.is_object()) << list.dump();
+  EXPECT_EQ(ggx["builtin"], true);
+  EXPECT_EQ(ggx["format"], "explorer");
+  EXPECT_FALSE(ggx.contains("source"));
+  for (const json& p : ggx["params"]) {
+    for (const char* key : {"name", "type", "min", "max", "default"}) EXPECT_TRUE(p.contains(key)) << p.dump();
+    if (p["type"] == "color") {
+      EXPECT_TRUE(p["default"].is_array() && p["default"].size() == 3);
+    } else if (p["type"] == "float") {
+      EXPECT_TRUE(p["default"].is_number());
+    } else {
+      EXPECT_TRUE(p["default"].is_boolean());
+    }
+  }
+  json one = bodyJson(get("/api/brdfs/ggx"));
+  EXPECT_TRUE(one["source"].is_string());
+  EXPECT_NE(one["source"].get<std::string>().find("BRDF"), std::string::npos);
+}
+
+TEST_F(Service, UserBrdfLifecycle) {
+  auto v = post("/api/brdfs/validate", kLambertWhite, "text/plain");
+  ASSERT_TRUE(v);
+  ASSERT_EQ(v->status, 200) << v->body;
+  json vb = bodyJson(v);
+  EXPECT_EQ(vb["ok"], true);
+  ASSERT_EQ(vb["params"].size(), 1u);
+  EXPECT_EQ(vb["params"][0]["name"], "Kd");
+  EXPECT_EQ(vb["params"][0]["default"], json({1, 1, 1}));
+  EXPECT_TRUE(vb["warnings"].is_array());
+  EXPECT_TRUE(vb["compile_ms"].is_number());
+
+  auto r = put("/api/brdfs/itest-user_1", kLambertWhite, "text/plain");
+  ASSERT_TRUE(r);
+  EXPECT_EQ(r->status, 201) << r->body;
+  r = put("/api/brdfs/itest-user_1", kLambertWhite, "text/plain");
+  ASSERT_TRUE(r);
+  EXPECT_EQ(r->status, 200) << r->body;
+  json got = bodyJson(get("/api/brdfs/itest-user_1"));
+  EXPECT_EQ(got["source"], kLambertWhite);
+  EXPECT_EQ(got["builtin"], false);
+  bool listed = false;
+  for (const json& b : bodyJson(get("/api/brdfs"))) listed |= b["name"] == "itest-user_1";
+  EXPECT_TRUE(listed);
+
+  // Usable in a scene by name.
+  json body = furnaceScene("itest-user_1", json::object(), 16, 4);
+  body["spp"] = 4;
+  auto img = post("/api/render", body.dump());
+  ASSERT_TRUE(img);
+  EXPECT_EQ(img->status, 200) << img->body;
+  EXPECT_EQ(img->get_header_value("Content-Type"), "image/png");
+
+  auto d = del("/api/brdfs/itest-user_1");
+  ASSERT_TRUE(d);
+  EXPECT_EQ(d->status, 204);
+  EXPECT_EQ(get("/api/brdfs/itest-user_1")->status, 404);
+  EXPECT_EQ(del("/api/brdfs/itest-user_1")->status, 404);
+}
+
+TEST_F(Service, ServesTheWebUi) {
+  auto r = get("/");
+  ASSERT_TRUE(r);
+  ASSERT_EQ(r->status, 200);
+  EXPECT_NE(r->get_header_value("Content-Type").find("text/html"), std::string::npos);
+  EXPECT_NE(r->body.find("<html"), std::string::npos);
+  r = get("/api.js");
+  ASSERT_TRUE(r);
+  ASSERT_EQ(r->status, 200);
+  EXPECT_NE(r->get_header_value("Content-Type").find("javascript"), std::string::npos);
+  EXPECT_EQ(get("/no-such-file.js")->status, 404);
+}
+
+// ------------------------------------------------------------------------------------------
+// Process lifecycle: each test runs its own server.
+
+TEST(Lifecycle, HelpAndBadFlags) {
+  auto run = [](std::vector<std::string> args) {
+    pid_t pid = fork();
+    if (pid == 0) {
+      int devnull = ::open("/dev/null", O_WRONLY);
+      ::dup2(devnull, STDOUT_FILENO);
+      ::dup2(devnull, STDERR_FILENO);
+      std::vector<char*> argv{const_cast<char*>(BRDFA_SERVER_BINARY)};
+      for (auto& a : args) argv.push_back(a.data());
+      argv.push_back(nullptr);
+      ::execv(argv[0], argv.data());
+      ::_exit(127);
+    }
+    int status = 0;
+    ::waitpid(pid, &status, 0);
+    return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  };
+  EXPECT_EQ(run({"--help"}), 0);
+  EXPECT_EQ(run({"--port", "notaport"}), 2);
+  EXPECT_EQ(run({"--port", "70000"}), 2);
+  EXPECT_EQ(run({"--frobnicate"}), 2);
+  EXPECT_EQ(run({"--threads"}), 2);
+}
+
+TEST(Lifecycle, SigtermWithOpenStreamAndWaiterExitsCleanly) {
+  ServerProcess server;
+  std::string err = server.start({"--idle-timeout", "3"});
+  ASSERT_EQ(err, "");
+  // A scene that never converges during the test, a stream client, and a frame waiter.
+  auto put = server.client()->Put("/api/sessions/default/scene",
+                                  furnaceScene("lambert", json::object(), 32, 1 << 20, 1).dump(), "application/json");
+  ASSERT_TRUE(put);
+  ASSERT_EQ(put->status, 200) << put->body;
+
+  std::atomic<size_t> streamed{0};
+  std::thread streamer([&] {
+    auto cli = server.client(30);
+    cli->Get("/api/sessions/default/stream", httplib::Headers{}, [&](const char*, size_t len) {
+      streamed += len;
+      return true;
+    });
+  });
+  std::thread waiter([&] {
+    auto cli = server.client(30);
+    cli->Get("/api/sessions/default/frame?min_spp=1000000000");
+  });
+  for (auto deadline = Clock::now() + std::chrono::seconds(10); streamed == 0 && Clock::now() < deadline;)
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  EXPECT_GT(streamed.load(), 0u) << "stream delivered nothing";
+
+  auto t0 = Clock::now();
+  int code = server.terminate(std::chrono::seconds(20));
+  EXPECT_EQ(code, 0) << server.logTail();
+  EXPECT_LT(Clock::now() - t0, std::chrono::seconds(10)) << "shutdown too slow";
+  streamer.join();
+  waiter.join();
+}
+
+}  // namespace
+}  // namespace brdfa::itest

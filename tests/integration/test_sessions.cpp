@@ -1,0 +1,352 @@
+// Interactive sessions: scenes, frames with min_spp, stats, the multipart PNG stream, isolation.
+#include <atomic>
+#include <cmath>
+#include <thread>
+
+#include "server_process.h"
+
+namespace brdfa::itest {
+namespace {
+
+using nlohmann::json;
+using Clock = std::chrono::steady_clock;
+
+class Sessions : public ServerTest {
+ protected:
+  void SetUp() override {
+    ServerTest::SetUp();
+    // Our own white Lambertian: the test knows its parameter names, whatever the built-ins are.
+    auto r = put("/api/brdfs/itest_lambert", kLambertWhite, "text/plain");
+    ASSERT_TRUE(r);
+    ASSERT_TRUE(r->status == 200 || r->status == 201) << r->body;
+  }
+
+  // GET frame as PFM, asserting 200; returns the image and X-Samples.
+  static void frame(const std::string& session, uint64_t minSpp, Image& img, uint64_t* samples = nullptr) {
+    auto r = get("/api/sessions/" + session + "/frame?format=pfm&min_spp=" + std::to_string(minSpp));
+    ASSERT_TRUE(r);
+    ASSERT_EQ(r->status, 200) << r->body;
+    ASSERT_TRUE(r->has_header("X-Samples"));
+    ASSERT_TRUE(r->has_header("X-Render-Ms"));
+    if (samples) *samples = std::stoull(r->get_header_value("X-Samples"));
+    ASSERT_TRUE(decodeImage(r->body, img));
+  }
+
+  static double interiorMean(const Image& img, double expected, double tolerance) {
+    auto interior = interiorPixels(img);
+    EXPECT_GT(interior.size(), img.width * img.height / 5);
+    double sum = 0;
+    int bad = 0;
+    for (auto [x, y] : interior) {
+      double v = img.lum(x, y);
+      if (std::fabs(v - expected) > tolerance) ++bad;
+      sum += v;
+    }
+    EXPECT_EQ(bad, 0) << "interior pixels off by more than " << tolerance;
+    return interior.empty() ? 0.0 : sum / interior.size();
+  }
+};
+
+TEST_F(Sessions, DefaultSessionExistsWithTheDocumentedScene) {
+  auto r = get("/api/sessions/default/scene");
+  ASSERT_TRUE(r);
+  ASSERT_EQ(r->status, 200) << r->body;
+  json scene = bodyJson(r);
+  EXPECT_EQ(scene["environment"]["name"], "sky");
+  EXPECT_EQ(scene["environment"]["visible"], true);
+  ASSERT_EQ(scene["objects"].size(), 1u);
+  EXPECT_EQ(scene["objects"][0]["mesh"], "sphere");
+  EXPECT_EQ(scene["objects"][0]["brdf"], "ggx");
+  EXPECT_EQ(scene["render"]["width"], 512);
+  EXPECT_EQ(scene["render"]["height"], 512);
+  EXPECT_EQ(scene["render"]["samples_per_frame"], 4);
+  EXPECT_EQ(scene["render"]["max_samples"], 4096);
+  // Round trip: what GET returns, PUT accepts unchanged, and GET then returns the same.
+  auto p = put("/api/sessions/default/scene", r->body);
+  ASSERT_TRUE(p);
+  ASSERT_EQ(p->status, 200) << p->body;
+  EXPECT_EQ(bodyJson(p), scene);
+  EXPECT_EQ(bodyJson(get("/api/sessions/default/scene")), scene);
+}
+
+TEST_F(Sessions, FrameStatsAndParameterOnlyPatch) {
+  json scene = furnaceScene("itest_lambert", {{"Kd", {1, 1, 1}}}, 64, 64);
+  auto r = put("/api/sessions/default/scene", scene.dump());
+  ASSERT_TRUE(r);
+  ASSERT_EQ(r->status, 200) << r->body;
+  json full = bodyJson(r);
+  EXPECT_EQ(full["render"]["width"], 64);
+  EXPECT_EQ(full["camera"]["fov"], 45);  // defaults filled in
+
+  Image img;
+  uint64_t samples = 0;
+  ASSERT_NO_FATAL_FAILURE(frame("default", 64, img, &samples));
+  EXPECT_GE(samples, 64u);
+  EXPECT_EQ(img.width, 64);
+  EXPECT_NEAR(interiorMean(img, 1.0, 0.01), 1.0, 0.002);
+
+  json stats = bodyJson(get("/api/sessions/default/stats"));
+  EXPECT_EQ(stats["spp"], 64) << stats.dump();
+  EXPECT_EQ(stats["converged"], true) << stats.dump();
+  for (const char* key : {"elapsed_ms", "ms_per_frame", "fps", "vertices", "triangles", "rel_error", "nan_samples",
+                          "passes", "scene_version"})
+    EXPECT_TRUE(stats.contains(key)) << key;
+  EXPECT_GT(stats["vertices"].get<int>(), 0);
+  EXPECT_EQ(stats["nan_samples"], 0);
+  uint64_t version = stats["scene_version"].get<uint64_t>();
+
+  // Parameter-only merge patch: Kd to 0.5 (objects is an array: sent whole, RFC 7386).
+  json patchBody = {{"objects", json::array({{{"brdf", "itest_lambert"}, {"params", {{"Kd", {0.5, 0.5, 0.5}}}}}})}};
+  r = patch("/api/sessions/default/scene", patchBody.dump());
+  ASSERT_TRUE(r);
+  ASSERT_EQ(r->status, 200) << r->body;
+  EXPECT_EQ(bodyJson(r)["render"]["width"], 64) << "PATCH must keep what it does not mention";
+  ASSERT_NO_FATAL_FAILURE(frame("default", 64, img, &samples));
+  EXPECT_GE(samples, 64u);
+  EXPECT_NEAR(interiorMean(img, 0.5, 0.005), 0.5, 0.001);
+  stats = bodyJson(get("/api/sessions/default/stats"));
+  EXPECT_GT(stats["scene_version"].get<uint64_t>(), version);
+
+  // A camera-only patch keeps the objects.
+  r = patch("/api/sessions/default/scene", R"({"camera": {"fov": 40}})");
+  ASSERT_TRUE(r);
+  ASSERT_EQ(r->status, 200) << r->body;
+  json after = bodyJson(r);
+  EXPECT_EQ(after["camera"]["fov"], 40);
+  EXPECT_EQ(after["objects"][0]["params"]["Kd"], json({0.5, 0.5, 0.5}));
+}
+
+TEST_F(Sessions, MinSppBeyondMaxSamplesDoesNotHang) {
+  auto r = put("/api/sessions/default/scene", furnaceScene("itest_lambert", json::object(), 32, 16, 4).dump());
+  ASSERT_TRUE(r && r->status == 200);
+  auto t0 = Clock::now();
+  r = get("/api/sessions/default/frame?format=png&min_spp=99999999999999999999999");
+  ASSERT_TRUE(r);
+  ASSERT_EQ(r->status, 200) << r->body;
+  EXPECT_EQ(r->get_header_value("Content-Type"), "image/png");
+  EXPECT_EQ(r->get_header_value("X-Samples"), "16");
+  EXPECT_EQ(r->body.substr(0, 8), std::string("\x89PNG\r\n\x1a\n", 8));
+  EXPECT_LT(Clock::now() - t0, std::chrono::seconds(20));
+}
+
+// Reads multipart/x-mixed-replace parts from the stream until `want` complete PNG parts
+// arrived, checking the framing of each: boundary, headers, Content-Length bytes, CRLF.
+struct PartReader {
+  std::string buf;
+  std::vector<std::string> pngs;
+  std::vector<uint64_t> samples;
+  std::string error;
+
+  // Returns false when the data cannot be multipart framing (then `error` says why).
+  bool parse() {
+    for (;;) {
+      size_t headEnd = buf.find("\r\n\r\n");
+      if (headEnd == std::string::npos) return true;
+      std::string head = buf.substr(0, headEnd);
+      if (head.rfind("--frame\r\n", 0) != 0) {
+        error = "part does not start with the boundary: " + head.substr(0, 40);
+        return false;
+      }
+      auto header = [&](const std::string& name) -> std::string {
+        size_t p = head.find("\r\n" + name + ": ");
+        if (p == std::string::npos) return "";
+        size_t start = p + name.size() + 4;
+        return head.substr(start, head.find("\r\n", start) - start);
+      };
+      if (header("Content-Type") != "image/png") {
+        error = "part without Content-Type: image/png";
+        return false;
+      }
+      std::string len = header("Content-Length");
+      if (len.empty()) {
+        error = "part without Content-Length";
+        return false;
+      }
+      size_t n = std::stoull(len);
+      size_t bodyStart = headEnd + 4;
+      if (buf.size() < bodyStart + n + 2) return true;  // need more bytes
+      if (buf.compare(bodyStart + n, 2, "\r\n") != 0) {
+        error = "part body not followed by CRLF (Content-Length wrong?)";
+        return false;
+      }
+      pngs.push_back(buf.substr(bodyStart, n));
+      std::string spp = header("X-Samples");
+      samples.push_back(spp.empty() ? 0 : std::stoull(spp));
+      buf.erase(0, bodyStart + n + 2);
+    }
+  }
+};
+
+TEST_F(Sessions, StreamDeliversMultipartPngParts) {
+  // Never converges within the test: frames keep coming.
+  auto r = put("/api/sessions/default/scene", furnaceScene("itest_lambert", json::object(), 32, 1 << 20, 1).dump());
+  ASSERT_TRUE(r && r->status == 200);
+  auto cli = server_->client(20);
+  PartReader reader;
+  std::string contentType;
+  bool framingOk = true;
+  auto res = cli->Get(
+      "/api/sessions/default/stream", httplib::Headers{},
+      [&](const httplib::Response& response) {
+        contentType = response.get_header_value("Content-Type");
+        return response.status == 200;
+      },
+      [&](const char* data, size_t len) {
+        reader.buf.append(data, len);
+        framingOk = reader.parse();
+        return framingOk && reader.pngs.size() < 3;  // stop after 3 parts
+      });
+  (void)res;  // canceled by us: not an error here
+  EXPECT_EQ(contentType, "multipart/x-mixed-replace; boundary=frame");
+  ASSERT_TRUE(framingOk) << reader.error;
+  ASSERT_GE(reader.pngs.size(), 2u);
+  for (const std::string& png : reader.pngs) EXPECT_EQ(png.substr(0, 8), std::string("\x89PNG\r\n\x1a\n", 8));
+  // Only newer frames are sent.
+  EXPECT_GT(reader.samples[1], reader.samples[0]);
+
+  // A converged session still gives a new client its final frame at once, and never a frame
+  // of the scene before (Kd changes, so accumulation restarts and the final frame has 8 spp).
+  r = put("/api/sessions/default/scene", furnaceScene("itest_lambert", {{"Kd", {0.5, 0.5, 0.5}}}, 32, 8, 8).dump());
+  ASSERT_TRUE(r && r->status == 200);
+  PartReader second;
+  auto t0 = Clock::now();
+  cli->Get("/api/sessions/default/stream", httplib::Headers{}, [&](const char* data, size_t len) {
+    second.buf.append(data, len);
+    return second.parse() && second.pngs.empty();
+  });
+  ASSERT_EQ(second.pngs.size(), 1u) << second.error;
+  EXPECT_LT(Clock::now() - t0, std::chrono::seconds(5));
+  EXPECT_EQ(second.samples[0], 8u);
+}
+
+TEST_F(Sessions, TwoSessionsKeepSeparateScenes) {
+  auto ra = post("/api/sessions", furnaceScene("itest_lambert", {{"Kd", {0.25, 0.25, 0.25}}}, 32, 16).dump());
+  auto rb = post("/api/sessions", furnaceScene("itest_lambert", {{"Kd", {0.75, 0.75, 0.75}}}, 48, 16).dump());
+  ASSERT_TRUE(ra && rb);
+  ASSERT_EQ(ra->status, 201) << ra->body;
+  ASSERT_EQ(rb->status, 201) << rb->body;
+  std::string a = bodyJson(ra)["id"], b = bodyJson(rb)["id"];
+  ASSERT_NE(a, b);
+
+  Image ia, ib;
+  ASSERT_NO_FATAL_FAILURE(frame(a, 16, ia));
+  ASSERT_NO_FATAL_FAILURE(frame(b, 16, ib));
+  EXPECT_EQ(ia.width, 32);
+  EXPECT_EQ(ib.width, 48);
+  EXPECT_NEAR(interiorMean(ia, 0.25, 0.003), 0.25, 0.001);
+  EXPECT_NEAR(interiorMean(ib, 0.75, 0.008), 0.75, 0.002);
+
+  // Changing A leaves B alone.
+  auto r = patch(
+      "/api/sessions/" + a + "/scene",
+      json{{"objects", json::array({{{"brdf", "itest_lambert"}, {"params", {{"Kd", {0.9, 0.9, 0.9}}}}}})}}.dump());
+  ASSERT_TRUE(r && r->status == 200) << (r ? r->body : "");
+  ASSERT_NO_FATAL_FAILURE(frame(a, 16, ia));
+  ASSERT_NO_FATAL_FAILURE(frame(b, 16, ib));
+  EXPECT_NEAR(interiorMean(ia, 0.9, 0.01), 0.9, 0.002);
+  EXPECT_NEAR(interiorMean(ib, 0.75, 0.008), 0.75, 0.002);
+  EXPECT_EQ(bodyJson(get("/api/sessions/" + b + "/scene"))["objects"][0]["params"]["Kd"], json({0.75, 0.75, 0.75}));
+
+  auto list = bodyJson(get("/api/sessions"));
+  EXPECT_GE(list.size(), 3u);
+
+  // Deleting ends them; default stays.
+  for (const std::string& id : {a, b}) {
+    auto d = del("/api/sessions/" + id);
+    ASSERT_TRUE(d);
+    EXPECT_EQ(d->status, 204);
+    auto g = get("/api/sessions/" + id);
+    ASSERT_TRUE(g);
+    EXPECT_EQ(g->status, 404);
+  }
+  auto g = get("/api/sessions/default");
+  ASSERT_TRUE(g);
+  EXPECT_EQ(g->status, 200);
+}
+
+TEST_F(Sessions, DeletingASessionEndsItsStreams) {
+  auto r = post("/api/sessions", furnaceScene("itest_lambert", json::object(), 32, 1 << 20, 1).dump());
+  ASSERT_TRUE(r);
+  ASSERT_EQ(r->status, 201) << r->body;
+  std::string id = bodyJson(r)["id"];
+  std::atomic<size_t> received{0};
+  std::atomic<bool> ended{false};
+  std::thread streamer([&] {
+    auto cli = server_->client(30);
+    cli->Get("/api/sessions/" + id + "/stream", httplib::Headers{}, [&](const char*, size_t len) {
+      received += len;
+      return true;
+    });
+    ended = true;
+  });
+  for (auto deadline = Clock::now() + std::chrono::seconds(10); received == 0 && Clock::now() < deadline;)
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  EXPECT_GT(received.load(), 0u);
+  auto d = del("/api/sessions/" + id);
+  ASSERT_TRUE(d);
+  EXPECT_EQ(d->status, 204);
+  for (auto deadline = Clock::now() + std::chrono::seconds(5); !ended && Clock::now() < deadline;)
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  EXPECT_TRUE(ended.load()) << "stream still open after its session was deleted";
+  streamer.join();
+}
+
+TEST_F(Sessions, SessionCountIsCapped) {
+  std::vector<std::string> ids;
+  int status = 0;
+  for (int i = 0; i < 40; ++i) {
+    auto r = post("/api/sessions", furnaceScene("itest_lambert", json::object(), 16, 1).dump());
+    ASSERT_TRUE(r);
+    status = r->status;
+    if (status != 201) break;
+    ids.push_back(bodyJson(r)["id"]);
+  }
+  EXPECT_EQ(status, 429);
+  EXPECT_EQ(bodyJson(get("/api/sessions")).size(), ids.size() + 1);  // + default
+  for (const std::string& id : ids) EXPECT_EQ(del("/api/sessions/" + id)->status, 204);
+  auto r = post("/api/sessions", "");  // room again; an empty body takes every default
+  ASSERT_TRUE(r);
+  ASSERT_EQ(r->status, 201) << r->body;
+  json scene = bodyJson(r)["scene"];
+  EXPECT_EQ(scene["environment"]["name"], "furnace");
+  EXPECT_EQ(scene["objects"][0]["brdf"], "lambert");
+  EXPECT_EQ(del("/api/sessions/" + bodyJson(r)["id"].get<std::string>())->status, 204);
+}
+
+TEST_F(Sessions, NanProducingBrdfIsCountedAndNeverReachesPixels) {
+  auto r = put("/api/brdfs/itest_nan", kNanOnHalfHemisphere, "text/plain");
+  ASSERT_TRUE(r);
+  ASSERT_TRUE(r->status == 200 || r->status == 201) << r->body;
+  r = post("/api/sessions", furnaceScene("itest_nan", json::object(), 32, 64).dump());
+  ASSERT_TRUE(r);
+  ASSERT_EQ(r->status, 201) << r->body;
+  std::string id = bodyJson(r)["id"];
+  Image img;
+  uint64_t samples = 0;
+  ASSERT_NO_FATAL_FAILURE(frame(id, 64, img, &samples));
+  EXPECT_GE(samples, 64u);
+  size_t nonFinite = 0;
+  for (float v : img.rgba) nonFinite += !std::isfinite(v);
+  EXPECT_EQ(nonFinite, 0u) << "NaN/Inf samples must be dropped, not accumulated";
+  json stats = bodyJson(get("/api/sessions/" + id + "/stats"));
+  EXPECT_GT(stats["nan_samples"].get<uint64_t>(), 0u) << stats.dump();
+  // The PNG of the same session decodes fine too.
+  auto png = get("/api/sessions/" + id + "/frame");
+  ASSERT_TRUE(png);
+  EXPECT_EQ(png->status, 200);
+  del("/api/sessions/" + id);
+
+  // The one-shot render reports the count in a header.
+  json body = furnaceScene("itest_nan", json::object(), 32, 16);
+  body["spp"] = 16;
+  body["format"] = "pfm";
+  r = post("/api/render", body.dump());
+  ASSERT_TRUE(r);
+  ASSERT_EQ(r->status, 200) << r->body;
+  EXPECT_GT(std::stoull(r->get_header_value("X-Nan-Samples")), 0u);
+  ASSERT_TRUE(decodeImage(r->body, img));
+  for (float v : img.rgba) ASSERT_TRUE(std::isfinite(v));
+}
+
+}  // namespace
+}  // namespace brdfa::itest
