@@ -14,6 +14,8 @@ namespace brdfa {
 
 struct GpuMesh {
   std::string name;
+  float boundsMin[3] = {0, 0, 0};  // object-space bounding box
+  float boundsMax[3] = {0, 0, 0};
   Buffer vertices;
   Buffer indices;
   uint32_t vertexCount = 0;

@@ -2,6 +2,7 @@
 
 #include <glm/gtc/type_ptr.hpp>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstring>
@@ -283,18 +284,26 @@ Result<void> RenderViewImpl::setScene(const Scene& scene) {
                   std::memcmp(objects[i].params.mapped(), objects_[i].params.mapped(), objects[i].params.size()) == 0;
   }
   const bool geometryChanged = resized || !hasScene_ || !sameGeometry(scene_, scene);
+  const bool lightingChanged = !hasScene_ || !sameLighting(scene_, scene);
   const bool restart = geometryChanged || !sameShading;
   const bool displayChanged = !hasScene_ || scene.render.exposure != scene_.render.exposure ||
                               scene.render.samplesPerFrame != scene_.render.samplesPerFrame ||
                               scene.render.maxSamples != scene_.render.maxSamples;
 
+  const glm::mat4 viewProj = cameraFrame(scene.camera, width, height).viewProj;
+  for (size_t i = 0; i < objects.size(); ++i)
+    objects[i].pixels = screenBounds(viewProj, modelMatrix(scene.objects[i]), objects[i].mesh->boundsMin,
+                                     objects[i].mesh->boundsMax, width, height);
   releaseObjects(objects_);
   objects_ = std::move(objects);
   scene_ = scene;
   hasScene_ = true;
   if (geometryChanged) gbufferPending_ = true;
+  // A new camera, geometry or environment changes coverage or background: clear everything and
+  // redraw the background. A new BRDF or parameters keep both: the first pass overwrites the
+  // object pixels instead (see the shade kernel), which is cheaper.
+  if (geometryChanged || lightingChanged) clearPending_ = true;
   if (restart) {
-    clearPending_ = true;
     const uint64_t version = stats_.sceneVersion;
     stats_ = FrameStats{};
     stats_.sceneVersion = version;
@@ -366,11 +375,10 @@ void RenderViewImpl::recordPending(VkCommandBuffer cb) {
       vkCmdCopyImageToBuffer(cb, targets[i]->handle(), VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL, gbuffer_.handle(), 1, &region);
     }
   }
-  if (clearPending_) {
-    vkCmdFillBuffer(cb, accum_.handle(), 0, VK_WHOLE_SIZE, 0);
-    vkCmdFillBuffer(cb, counters_.handle(), 0, VK_WHOLE_SIZE, 0);
-  }
-  if (gbufferPending_ || clearPending_)
+  const bool firstPass = stats_.passes == 0;
+  if (clearPending_) vkCmdFillBuffer(cb, accum_.handle(), 0, VK_WHOLE_SIZE, 0);
+  if (firstPass) vkCmdFillBuffer(cb, counters_.handle(), 0, VK_WHOLE_SIZE, 0);
+  if (gbufferPending_ || clearPending_ || firstPass)
     memoryBarrier(cb, VK_PIPELINE_STAGE_TRANSFER_BIT, VK_ACCESS_TRANSFER_WRITE_BIT,
                   VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_ACCESS_SHADER_READ_BIT | VK_ACCESS_SHADER_WRITE_BIT);
   if (clearPending_ && scene_.environment.visible) {
@@ -433,8 +441,11 @@ Result<FrameStats> RenderViewImpl::renderPass() {
     return stats_;
   }
   const auto t0 = std::chrono::steady_clock::now();
-  const uint32_t count = static_cast<uint32_t>(
-      std::min<uint64_t>(static_cast<uint64_t>(scene_.render.samplesPerFrame), maxSamples - stats_.spp));
+  // Passes after a restart ramp up 1, 2, 4, ... samples to samples_per_frame, so the first
+  // frame of a change arrives quickly.
+  const uint64_t ramp = stats_.passes < 20 ? (uint64_t(1) << stats_.passes) : UINT64_MAX;
+  const uint32_t count = static_cast<uint32_t>(std::min<uint64_t>(
+      {static_cast<uint64_t>(scene_.render.samplesPerFrame), ramp, maxSamples - stats_.spp}));
   auto begun = cmd_.begin();
   if (!begun) return begun.takeError();
   VkCommandBuffer cb = *begun;
@@ -444,16 +455,21 @@ Result<FrameStats> RenderViewImpl::renderPass() {
   push.frame[2] = static_cast<uint32_t>(stats_.spp);  // the sequence continues across passes
   push.frame[3] = count;
   push.target[1] = static_cast<uint32_t>(stats_.passes & 1u);  // alternate half accumulators
-  const uint32_t gx = groups(width_, kShadeGroup), gy = groups(height_, kShadeGroup);
+  push.target[3] = stats_.passes == 0 ? 1u : 0u;                // first pass: overwrite, not add
   const VkPipelineLayout layout = r_->computeLayout();
   vkCmdBindDescriptorSets(cb, VK_PIPELINE_BIND_POINT_COMPUTE, layout, 0, 1, &viewSet_, 0, nullptr);
-  // Objects cover disjoint pixels, so their dispatches need no barrier between them.
+  // Objects cover disjoint pixels, so their dispatches need no barrier between them. Each runs
+  // over its screen bounds only: every pixel visited costs G-buffer loads even when it is not
+  // the object's.
   for (size_t i = 0; i < objects_.size(); ++i) {
+    const PixelRect& rect = objects_[i].pixels;
+    if (rect.width == 0 || rect.height == 0) continue;  // off screen
     push.target[0] = static_cast<uint32_t>(i + 1);
+    push.target[2] = rect.x | (rect.y << 16);  // dispatch origin; images are at most 4096 wide
     vkCmdBindPipeline(cb, VK_PIPELINE_BIND_POINT_COMPUTE, objects_[i].kernel->kernel->pipeline());
     vkCmdBindDescriptorSets(cb, VK_PIPELINE_BIND_POINT_COMPUTE, layout, 1, 1, &objects_[i].set, 0, nullptr);
     vkCmdPushConstants(cb, layout, VK_SHADER_STAGE_COMPUTE_BIT, 0, sizeof(push), &push);
-    vkCmdDispatch(cb, gx, gy, 1);
+    vkCmdDispatch(cb, groups(rect.width, kShadeGroup), groups(rect.height, kShadeGroup), 1);
   }
   // Refresh the error estimate in the same submission when it is due (and a second half exists).
   const bool refreshError = stats_.passes >= 1 &&
@@ -490,6 +506,9 @@ Result<Frame> RenderViewImpl::readFrame(bool linear) {
   std::lock_guard<std::mutex> lock(mutex_);
   if (!hasScene_) return makeError(ErrorCode::InvalidArgument, "no scene has been set");
   const bool host = r_->hostResolve();
+  // Before the first pass of a restart the accumulators may still hold the previous scene's
+  // object pixels (a parameter change does not clear them): clear now.
+  if (stats_.passes == 0) clearPending_ = true;
   if (!host || gbufferPending_ || clearPending_) {
     auto begun = cmd_.begin();
     if (!begun) return begun.takeError();

@@ -8,6 +8,7 @@
 #include "brdfa/renderer.h"
 #include "gpu_assets.h"
 #include "host_resolve.h"
+#include "scene_math.h"
 #include "renderer_impl.h"
 
 namespace brdfa {
@@ -31,6 +32,7 @@ class RenderViewImpl final : public RenderView {
     Buffer params;     // std140 BrdfParams
     Buffer transform;  // ObjectUniform
     VkDescriptorSet set = VK_NULL_HANDLE;
+    PixelRect pixels;  // where the shading dispatch runs (the object's screen bounds)
   };
 
   Result<void> resize(uint32_t width, uint32_t height);

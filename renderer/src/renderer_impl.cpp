@@ -1,6 +1,8 @@
 #include "renderer_impl.h"
 
+#include <algorithm>
 #include <array>
+#include <cmath>
 #include <cstring>
 
 #include "brdf_features.h"
@@ -408,6 +410,15 @@ Result<std::shared_ptr<const GpuMesh>> RendererImpl::mesh(const std::string& nam
   auto gpu = std::make_shared<GpuMesh>();
   gpu->name = name;
   gpu->vertexCount = static_cast<uint32_t>(data->vertices.size());
+  for (int a = 0; a < 3; ++a) {
+    gpu->boundsMin[a] = INFINITY;
+    gpu->boundsMax[a] = -INFINITY;
+  }
+  for (const Vertex& v : data->vertices)
+    for (int a = 0; a < 3; ++a) {
+      gpu->boundsMin[a] = std::min(gpu->boundsMin[a], v.position[a]);
+      gpu->boundsMax[a] = std::max(gpu->boundsMax[a], v.position[a]);
+    }
   gpu->indexCount = static_cast<uint32_t>(data->indices.size());
   auto vb = deviceBufferWith(*ctx_, data->vertices.data(), data->vertices.size() * sizeof(Vertex),
                              VK_BUFFER_USAGE_VERTEX_BUFFER_BIT);

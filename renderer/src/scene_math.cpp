@@ -32,4 +32,29 @@ glm::mat4 modelMatrix(const SceneObject& o) {
   return glm::scale(m, glm::vec3(o.scale[0], o.scale[1], o.scale[2]));
 }
 
+PixelRect screenBounds(const glm::mat4& viewProj, const glm::mat4& model, const float boundsMin[3],
+                       const float boundsMax[3], uint32_t width, uint32_t height) {
+  const PixelRect whole{0, 0, width, height};
+  float x0 = INFINITY, y0 = INFINITY, x1 = -INFINITY, y1 = -INFINITY;
+  for (int corner = 0; corner < 8; ++corner) {
+    glm::vec4 local((corner & 1) ? boundsMax[0] : boundsMin[0], (corner & 2) ? boundsMax[1] : boundsMin[1],
+                    (corner & 4) ? boundsMax[2] : boundsMin[2], 1.0f);
+    glm::vec4 clip = viewProj * (model * local);
+    if (clip.w <= 1e-4f) return whole;  // behind or at the camera plane
+    float px = (clip.x / clip.w * 0.5f + 0.5f) * static_cast<float>(width);
+    float py = (clip.y / clip.w * 0.5f + 0.5f) * static_cast<float>(height);
+    x0 = std::min(x0, px);
+    x1 = std::max(x1, px);
+    y0 = std::min(y0, py);
+    y1 = std::max(y1, py);
+  }
+  const float w = static_cast<float>(width), h = static_cast<float>(height);
+  x0 = std::clamp(std::floor(x0) - 1.0f, 0.0f, w);
+  y0 = std::clamp(std::floor(y0) - 1.0f, 0.0f, h);
+  x1 = std::clamp(std::ceil(x1) + 1.0f, 0.0f, w);
+  y1 = std::clamp(std::ceil(y1) + 1.0f, 0.0f, h);
+  return PixelRect{static_cast<uint32_t>(x0), static_cast<uint32_t>(y0), static_cast<uint32_t>(x1 - x0),
+                   static_cast<uint32_t>(y1 - y0)};
+}
+
 }  // namespace brdfa

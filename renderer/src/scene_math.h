@@ -22,4 +22,12 @@ CameraFrame cameraFrame(const Camera& camera, uint32_t width, uint32_t height);
 // translate * rotateZ * rotateY * rotateX * scale (rotation about X is applied first).
 glm::mat4 modelMatrix(const SceneObject& object);
 
+// Pixels an object can cover: the screen rectangle of its transformed bounding box, plus a
+// pixel of margin. The whole image when a corner is behind the camera (no safe projection).
+struct PixelRect {
+  uint32_t x = 0, y = 0, width = 0, height = 0;
+};
+PixelRect screenBounds(const glm::mat4& viewProj, const glm::mat4& model, const float boundsMin[3],
+                       const float boundsMax[3], uint32_t width, uint32_t height);
+
 }  // namespace brdfa

@@ -7,7 +7,8 @@
 layout(local_size_x = 8, local_size_y = 8, local_size_z = 1) in;
 
 void main() {
-  uvec2 p = gl_GlobalInvocationID.xy;
+  // The dispatch covers the object's screen bounds, starting at the packed origin.
+  uvec2 p = gl_GlobalInvocationID.xy + uvec2(brdfa_pc.target.z & 0xffffu, brdfa_pc.target.z >> 16);
   if (p.x >= brdfa_pc.frame.x || p.y >= brdfa_pc.frame.y) return;
 
   uint pixel = brdfa_pixelIndex(p);
@@ -53,7 +54,14 @@ void main() {
     }
     sum += c;
   }
-  uint idx = brdfa_halfOffset(brdfa_pc.target.y) + pixel;
-  brdfa_accum[idx] += vec4(sum * brdfa_environmentIntensity(), float(count - dropped));
+  vec4 value = vec4(sum * brdfa_environmentIntensity(), float(count - dropped));
+  if (brdfa_pc.target.w != 0u) {
+    // First pass after a restart (always half A): overwrite this pixel's halves instead of
+    // adding, so a change of BRDF or parameters needs no clear of the whole buffer.
+    brdfa_accum[pixel] = value;
+    brdfa_accum[brdfa_halfOffset(1u) + pixel] = vec4(0.0);
+  } else {
+    brdfa_accum[brdfa_halfOffset(brdfa_pc.target.y) + pixel] += value;
+  }
   if (dropped != 0u) atomicAdd(brdfa_nanSamples, dropped);
 }

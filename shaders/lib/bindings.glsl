@@ -26,7 +26,9 @@ layout(push_constant) uniform BrdfaPush {
   vec4 cameraForward;  // xyz, unit
   vec4 env;            // x intensity, y cos(rotation), z sin(rotation)
   uvec4 frame;         // x width, y height, z index of this pass's first sample, w samples this pass
-  uvec4 target;        // x object id (1-based), y half accumulator (0|1), z write float output
+  uvec4 target;        // x object id (1-based), y half accumulator (0|1),
+                       // z shade: dispatch origin x | y << 16; resolve: write float output,
+                       // w first pass after a restart (overwrite instead of add)
   vec4 tone;           // x exposure scale 2^exposure
 } brdfa_pc;
 
