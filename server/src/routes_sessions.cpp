@@ -225,17 +225,16 @@ void registerSessionRoutes(httplib::Server& server, Service& service) {
     session->touch();
     if (!requireScene(*session, res)) return;
     // Only waits that can last hold a worker; an answer available now never counts.
-    Session::WaitOutcome outcome = Session::WaitOutcome::Reached;
-    if (minSpp > 0) {
-      if (service.frameWaiters.fetch_add(1) >= service.maxFrameWaiters) {
-        service.frameWaiters.fetch_sub(1);
-        return sendError(res, 503, "busy",
-                         "too many requests waiting for samples (at most " + std::to_string(service.maxFrameWaiters) +
-                             "); retry later or without min_spp");
-      }
-      outcome = session->waitForSamples(minSpp, kFrameWait);
+    if (service.frameWaiters.fetch_add(1) >= service.maxFrameWaiters) {
       service.frameWaiters.fetch_sub(1);
+      return sendError(res, 503, "busy",
+                       "too many requests waiting for samples (at most " + std::to_string(service.maxFrameWaiters) +
+                           "); retry later or without min_spp");
     }
+    const bool pfm = format == "pfm";
+    Session::WaitOutcome outcome = Session::WaitOutcome::Reached;
+    auto frame = session->waitAndEncodeFrame(minSpp, kFrameWait, pfm, outcome);
+    service.frameWaiters.fetch_sub(1);
     switch (outcome) {
       case Session::WaitOutcome::Stopped:
         return sendError(res, 503, "unavailable", "the session was stopped (deleted, or the server is shutting down)");
@@ -246,14 +245,9 @@ void registerSessionRoutes(httplib::Server& server, Service& service) {
       case Session::WaitOutcome::TimedOut:  // bounded wait: answer with what there is
         break;
     }
-    bool pfm = format == "pfm";
-    Result<Frame> frame = session->readFrame(pfm);
     if (!frame) return sendError(res, frame.error());
-    const Frame& f = frame.value();
-    std::vector<uint8_t> bytes =
-        pfm ? encodePfm(f.rgba32f.data(), f.width, f.height) : encodePng(f.rgba8.data(), f.width, f.height);
-    setFrameHeaders(res, f.stats);
-    res.set_content(reinterpret_cast<const char*>(bytes.data()), bytes.size(),
+    setFrameHeaders(res, frame->stats);
+    res.set_content(reinterpret_cast<const char*>(frame->bytes.data()), frame->bytes.size(),
                     pfm ? "application/x-portable-floatmap" : "image/png");
   });
 

@@ -135,26 +135,45 @@ bool Session::watchedLocked(Clock::time_point now) const {
   return streamClients_ > 0 || waiters_ > 0 || now < watchedUntil_;
 }
 
-Session::WaitOutcome Session::waitForSamples(uint64_t minSpp, std::chrono::milliseconds timeout) {
-  std::unique_lock lock(mutex_);
-  ++waiters_;
-  wake_.notify_all();
-  auto reached = [&] {
-    if (stopping_ || renderError_) return true;
-    uint64_t target = std::min<uint64_t>(minSpp, static_cast<uint64_t>(std::max(maxSamples_, 0)));
-    return hasScene_ && (stats_.spp >= target || stats_.converged);
-  };
-  progress_.wait_for(lock, timeout, reached);
-  --waiters_;
-  // The client that waited is likely to ask again soon; keep rendering meanwhile.
-  watchedUntil_ = std::max(watchedUntil_, Clock::now() + idleTimeout_);
-  if (stopping_) return WaitOutcome::Stopped;
-  if (renderError_) return WaitOutcome::Failed;
-  return reached() ? WaitOutcome::Reached : WaitOutcome::TimedOut;
-}
-
-Result<Frame> Session::readFrame(bool linear) {
-  return withViewPriority([&] { return view_->readFrame(linear); });
+Result<Session::EncodedFrame> Session::waitAndEncodeFrame(uint64_t minSpp, std::chrono::milliseconds timeout,
+                                                          bool pfm, WaitOutcome& outcome) {
+  {
+    std::unique_lock lock(mutex_);
+    const uint64_t target = std::min<uint64_t>(minSpp, static_cast<uint64_t>(std::max(maxSamples_, 0)));
+    auto registered = waitTargets_.insert(target);
+    ++waiters_;
+    wake_.notify_all();
+    auto reached = [&] { return stopping_ || renderError_ || (hasScene_ && (stats_.spp >= target || stats_.converged)); };
+    progress_.wait_for(lock, timeout, reached);
+    --waiters_;
+    waitTargets_.erase(registered);
+    watchedUntil_ = std::max(watchedUntil_, Clock::now() + idleTimeout_);
+    if (stopping_) {
+      outcome = WaitOutcome::Stopped;
+      return makeError(ErrorCode::Internal, "session stopped");
+    }
+    outcome = renderError_ ? WaitOutcome::Failed : reached() ? WaitOutcome::Reached : WaitOutcome::TimedOut;
+    // Become a pending view call before releasing the lock: the render thread, which checks
+    // both under this lock, never sees a moment with neither and starts no pass in between.
+    ++pendingViewCalls_;
+  }
+  struct Done {
+    Session& s;
+    ~Done() {
+      {
+        std::lock_guard lock(s.mutex_);
+        --s.pendingViewCalls_;
+      }
+      s.wake_.notify_all();
+    }
+  } done{*this};
+  Result<Frame> frame = view_->readFrame(pfm);
+  if (!frame) return frame.takeError();
+  const Frame& f = frame.value();
+  EncodedFrame out;
+  out.bytes = pfm ? encodePfm(f.rgba32f.data(), f.width, f.height) : encodePng(f.rgba8.data(), f.width, f.height);
+  out.stats = f.stats;
+  return out;
 }
 
 void Session::addStreamClient() {
@@ -250,7 +269,10 @@ void Session::renderLoop() {
   std::unique_lock lock(mutex_);
   while (!stopping_) {
     bool canRender = hasScene_ && !renderError_;
-    bool wantPass = canRender && !stats_.converged && watchedLocked(Clock::now()) && pendingViewCalls_ == 0;
+    // A waiter whose samples are there reads next: no new pass may slip in before its read.
+    bool waiterSatisfied = !waitTargets_.empty() && stats_.spp >= *waitTargets_.begin();
+    bool wantPass = canRender && !stats_.converged && watchedLocked(Clock::now()) && pendingViewCalls_ == 0 &&
+                    !waiterSatisfied;
     bool wantPublish = canRender && streamClients_ > 0 && publishRequested_ && stats_.spp > 0 && pendingViewCalls_ == 0;
     if (!wantPass && !wantPublish) {
       // Nothing to do until a scene change, a watcher, a stream client or stop. A watched-until

@@ -1,11 +1,9 @@
-// Test harness for the integration suite: runs the real brdfa-server binary on a loopback port
-// (--port 0), reads its `listening on` line, and stops it with SIGTERM, reporting the exit
-// status so a test can insist on a clean shutdown.
+// Test harness for the integration suite: a fixture sharing one real server per suite, and
+// helpers for requests, images and scenes.
 #pragma once
 
 #include <gtest/gtest.h>
 #include <httplib.h>
-#include <sys/types.h>
 
 #include <chrono>
 #include <memory>
@@ -13,36 +11,17 @@
 #include <string>
 #include <vector>
 
+#include "server_process.h"
+
 namespace brdfa::itest {
 
-class ServerProcess {
+// The server process itself lives in tests/support (the bench uses it too); this wrapper
+// starts the binary under test from the source tree.
+class ServerProcess : public testsupport::ServerProcess {
  public:
-  ServerProcess() = default;
-  ~ServerProcess();  // kills a server still running
-  ServerProcess(const ServerProcess&) = delete;
-  ServerProcess& operator=(const ServerProcess&) = delete;
-
-  // Starts BRDFA_SERVER_BINARY --port 0 --root BRDFA_SOURCE_DIR --data-dir <fresh temp dir>
-  // plus `extraArgs`, waits for the listening line and a healthy /api/health. Returns "" on
-  // success, else why it failed (with the server log).
-  std::string start(const std::vector<std::string>& extraArgs = {});
-
-  // SIGTERM, then waits up to `timeout` for exit. Returns the exit code; -1 if it died by a
-  // signal or had to be killed after the timeout.
-  int terminate(std::chrono::seconds timeout = std::chrono::seconds(30));
-
-  bool running() const { return pid_ > 0; }
-  int port() const { return port_; }
-  pid_t pid() const { return pid_; }
-  std::string logTail(size_t bytes = 6000) const;  // the server's stderr
-
-  std::unique_ptr<httplib::Client> client(int readTimeoutSec = 120) const;
-
- private:
-  pid_t pid_ = -1;
-  int port_ = 0;
-  int stdoutFd_ = -1;
-  std::string tmpDir_;
+  std::string start(const std::vector<std::string>& extraArgs = {}) {
+    return testsupport::ServerProcess::start(BRDFA_SERVER_BINARY, BRDFA_SOURCE_DIR, extraArgs);
+  }
 };
 
 // A test suite sharing one server. Each derived suite starts its own server and, at the end,

@@ -1,6 +1,6 @@
 // Failure behaviour (DESIGN.md section 6): every bad input gets a JSON error with a fitting
 // status and leaves the server healthy (ServerTest::TearDown checks /api/health after each).
-#include "server_process.h"
+#include "server_fixture.h"
 
 namespace brdfa::itest {
 namespace {

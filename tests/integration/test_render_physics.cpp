@@ -2,7 +2,7 @@
 // a white Lambertian sphere in the furnace renders exactly 1.0 in linear float output).
 #include <cmath>
 
-#include "server_process.h"
+#include "server_fixture.h"
 
 namespace brdfa::itest {
 namespace {

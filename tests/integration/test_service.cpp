@@ -7,7 +7,7 @@
 #include <atomic>
 #include <thread>
 
-#include "server_process.h"
+#include "server_fixture.h"
 
 namespace brdfa::itest {
 namespace {

@@ -14,6 +14,7 @@
 #include <mutex>
 #include <nlohmann/json.hpp>
 #include <optional>
+#include <set>
 #include <string>
 #include <thread>
 #include <vector>
@@ -70,10 +71,18 @@ class Session {
 
   enum class WaitOutcome { Reached, TimedOut, Stopped, Failed };
   // Waits until spp >= min(minSpp, max_samples), the scene converged, rendering failed, the
-  // session stopped, or `timeout` passed. Counts as a watcher while waiting.
-  WaitOutcome waitForSamples(uint64_t minSpp, std::chrono::milliseconds timeout);
-
-  Result<Frame> readFrame(bool linear);
+  // session stopped, or `timeout` passed (counting as a watcher meanwhile), then reads the frame
+  // without letting the render thread start another pass in between: the pass that satisfied
+  // the wait is the one whose frame is read. `outcome` tells how the wait ended; on Stopped no
+  // frame is read.
+  // The frame is encoded (PNG, or PFM when `pfm`) before rendering resumes: on a CPU device the
+  // encoder and the render passes would share the cores, and the encode took 2-3x longer.
+  struct EncodedFrame {
+    std::vector<uint8_t> bytes;
+    FrameStats stats;
+  };
+  Result<EncodedFrame> waitAndEncodeFrame(uint64_t minSpp, std::chrono::milliseconds timeout, bool pfm,
+                                          WaitOutcome& outcome);
 
   // --- Streaming.
   void addStreamClient();
@@ -123,6 +132,7 @@ class Session {
   std::optional<Error> renderError_;
   Clock::time_point watchedUntil_{};
   int waiters_ = 0;
+  std::multiset<uint64_t> waitTargets_;  // spp each waitAndReadFrame caller waits for
   int pendingViewCalls_ = 0;
   int streamClients_ = 0;
   bool publishRequested_ = false;
