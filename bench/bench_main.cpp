@@ -1,9 +1,11 @@
-// brdfa-bench: prints the figures DESIGN.md section 5 asks for, as medians, in one run.
+// brdfa-bench: prints the figures DESIGN.md section 5 asks for, as medians, in one run: the
+// renderer's (library level) and the service's (through the real server over loopback HTTP).
 //   brdfa-bench [--rounds N] [--source DIR]
 #include <cstdio>
 #include <cstdlib>
 #include <string>
 
+#include "bench_http.h"
 #include "bench_renderer.h"
 
 int main(int argc, char** argv) {
@@ -18,5 +20,7 @@ int main(int argc, char** argv) {
       return 2;
     }
   }
-  return brdfa::bench::runRendererBench(source, rounds);
+  int code = brdfa::bench::runRendererBench(source, rounds);
+  if (code != 0) return code;
+  return brdfa::bench::runHttpBench(BRDFA_SERVER_BINARY, source);
 }
