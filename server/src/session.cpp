@@ -33,22 +33,30 @@ void Session::guarded(void (Session::*loop)()) {
   }
 }
 
+// Runs `f` when the scope ends, however it ends.
+template <class F>
+struct OnExit {
+  F f;
+  ~OnExit() { f(); }
+};
+template <class F>
+OnExit(F) -> OnExit<F>;
+
+void Session::endViewCall() {
+  {
+    std::lock_guard lock(mutex_);
+    --pendingViewCalls_;
+  }
+  wake_.notify_all();
+}
+
 template <class F>
 auto Session::withViewPriority(F&& call) -> decltype(call()) {
   {
     std::lock_guard lock(mutex_);
     ++pendingViewCalls_;
   }
-  struct Done {
-    Session& s;
-    ~Done() {
-      {
-        std::lock_guard lock(s.mutex_);
-        --s.pendingViewCalls_;
-      }
-      s.wake_.notify_all();
-    }
-  } done{*this};
+  OnExit endCall{[this] { endViewCall(); }};
   return call();
 }
 
@@ -157,16 +165,7 @@ Result<Session::EncodedFrame> Session::waitAndEncodeFrame(uint64_t minSpp, std::
     // both under this lock, never sees a moment with neither and starts no pass in between.
     ++pendingViewCalls_;
   }
-  struct Done {
-    Session& s;
-    ~Done() {
-      {
-        std::lock_guard lock(s.mutex_);
-        --s.pendingViewCalls_;
-      }
-      s.wake_.notify_all();
-    }
-  } done{*this};
+  OnExit endCall{[this] { endViewCall(); }};
   Result<Frame> frame = view_->readFrame(pfm);
   if (!frame) return frame.takeError();
   const Frame& f = frame.value();

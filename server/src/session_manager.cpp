@@ -22,16 +22,16 @@ std::string SessionManager::randomId() {
 
 SessionManager::Created SessionManager::create(const std::string& requestedId) {
   Created out;
+  // Whether a session may be added now; checked before and after the unlocked createView,
+  // since another create may fill the last slot (or the server stop) meanwhile. Holds mutex_.
+  auto refused = [&] {
+    if (stopped_) out.error = makeError(ErrorCode::DeviceError, "server is shutting down");
+    else if (sessions_.size() >= maxSessions_) out.full = true;
+    return stopped_ || out.full;
+  };
   {
     std::lock_guard lock(mutex_);
-    if (stopped_) {
-      out.error = makeError(ErrorCode::DeviceError, "server is shutting down");
-      return out;
-    }
-    if (sessions_.size() >= maxSessions_) {
-      out.full = true;
-      return out;
-    }
+    if (refused()) return out;
   }
   // createView may allocate device memory; not under the lock.
   Result<std::unique_ptr<RenderView>> view = renderer_->createView();
@@ -40,15 +40,7 @@ SessionManager::Created SessionManager::create(const std::string& requestedId) {
     return out;
   }
   std::lock_guard lock(mutex_);
-  if (stopped_) {
-    out.error = makeError(ErrorCode::DeviceError, "server is shutting down");
-    return out;
-  }
-  // Re-checked: another create may have filled the last slot while the view was made.
-  if (sessions_.size() >= maxSessions_) {
-    out.full = true;
-    return out;
-  }
+  if (refused()) return out;
   std::string id = requestedId;
   while (id.empty() || sessions_.count(id)) id = randomId();
   auto session = std::make_shared<Session>(id, std::move(view.value()), idleTimeout_);

@@ -111,6 +111,7 @@ class Session {
   // starve readFrame/setScene. The render thread holds off while such calls are pending.
   template <class F>
   auto withViewPriority(F&& call) -> decltype(call());
+  void endViewCall();  // ends one pending view call and wakes the render thread
 
   const std::string id_;
   const std::unique_ptr<RenderView> view_;
@@ -132,7 +133,7 @@ class Session {
   std::optional<Error> renderError_;
   Clock::time_point watchedUntil_{};
   int waiters_ = 0;
-  std::multiset<uint64_t> waitTargets_;  // spp each waitAndReadFrame caller waits for
+  std::multiset<uint64_t> waitTargets_;  // spp each waitAndEncodeFrame caller waits for
   int pendingViewCalls_ = 0;
   int streamClients_ = 0;
   bool publishRequested_ = false;
