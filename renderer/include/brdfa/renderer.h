@@ -49,7 +49,7 @@ struct FrameStats {
   uint64_t vertices = 0;
   uint64_t triangles = 0;
   bool converged = false;     // spp reached render.max_samples
-  uint64_t sceneVersion = 0;  // increments on every accepted setScene
+  uint64_t sceneVersion = 0;  // increments on every setScene that changed the scene
 };
 
 // A resolved frame read back from the device.
@@ -67,13 +67,17 @@ class RenderView {
  public:
   virtual ~RenderView() = default;
 
-  // Applies a scene. Compiles the BRDFs it needs (served from the cache when seen before),
-  // uploads what changed and restarts accumulation when anything changed. A change of parameter
-  // values only never recompiles. On error the previous scene stays in place.
+  // Applies a scene. Compiles the BRDFs it needs (served from the cache when seen before) and
+  // uploads what changed. Accumulation restarts when the image changes: camera, geometry,
+  // environment, sampling, image size, a BRDF or a parameter value. Exposure,
+  // samples_per_frame and max_samples keep it (lowering max_samples below the samples taken
+  // leaves spp above it, converged). A change of parameter values only never recompiles. An
+  // identical scene changes nothing. On error the previous scene stays in place.
   virtual Result<void> setScene(const Scene& scene) = 0;
 
-  // Renders one progressive pass of render.samples_per_frame samples per pixel (fewer when
-  // max_samples is near). Does nothing once converged.
+  // Renders one progressive pass of render.samples_per_frame samples per pixel: fewer in the
+  // first passes after a restart (1, 2, 4, ...) and when max_samples is near. Does nothing once
+  // converged.
   virtual Result<FrameStats> renderPass() = 0;
 
   virtual FrameStats stats() const = 0;
