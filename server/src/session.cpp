@@ -67,7 +67,10 @@ void Session::setInitializer(std::function<void(Session&, std::unique_lock<std::
 }
 
 void Session::ensureInitialized() {
-  if (initPending_.load()) beginSceneUpdate(true);
+  // Without a scene, also take the update lock: another request may be applying the default
+  // scene right now (it compiles for a while), and this one must wait for it, not answer
+  // "no scene".
+  if (initPending_.load() || !hasScene()) beginSceneUpdate(true);
 }
 
 std::unique_lock<std::mutex> Session::beginSceneUpdate(bool runInitializer) {

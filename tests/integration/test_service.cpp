@@ -166,5 +166,28 @@ TEST(Lifecycle, SigtermWithOpenStreamAndWaiterExitsCleanly) {
   waiter.join();
 }
 
+TEST(Lifecycle, DefaultSessionHasItsSceneForConcurrentFirstRequests) {
+  // The default scene is applied on first use (start-up compiles nothing). Requests arriving
+  // while that first application compiles must wait for it, not find a session without scene.
+  ServerProcess server;
+  std::string err = server.start();
+  ASSERT_TRUE(err.empty()) << err;
+  std::vector<int> statuses(4, 0);
+  std::vector<std::string> brdfs(4);
+  std::vector<std::thread> clients;
+  for (int i = 0; i < 4; ++i)
+    clients.emplace_back([&, i] {
+      auto r = server.client()->Get("/api/sessions/default/scene");
+      statuses[i] = r ? r->status : -1;
+      if (r && r->status == 200) brdfs[i] = bodyJson(r)["objects"][0].value("brdf", "");
+    });
+  for (auto& t : clients) t.join();
+  for (int i = 0; i < 4; ++i) {
+    EXPECT_EQ(statuses[i], 200) << "client " << i;
+    EXPECT_EQ(brdfs[i], "ggx") << "client " << i;
+  }
+  EXPECT_EQ(server.terminate(), 0);
+}
+
 }  // namespace
 }  // namespace brdfa::itest
