@@ -338,7 +338,10 @@ Result<std::shared_ptr<const ShadeKernel>> RendererImpl::shadeKernel(const BrdfD
                                                                      SamplingMode sampling, bool constantEnv) {
   if (brdf.format == BrdfFormat::Legacy)
     return makeError(ErrorCode::Unsupported, "legacy render() BRDFs are not supported yet");
-  AssembledProgram program = assembleShadeProgram(brdf, sampling, constantEnv);
+  return compiledKernel(assembleShadeProgram(brdf, sampling, constantEnv));
+}
+
+Result<std::shared_ptr<const ShadeKernel>> RendererImpl::compiledKernel(const AssembledProgram& program) {
   // Held across creation so concurrent requests for one program JIT it once.
   std::lock_guard<std::mutex> lock(kernelMutex_);
   auto it = kernelCache_.find(program.hash);
@@ -348,14 +351,23 @@ Result<std::shared_ptr<const ShadeKernel>> RendererImpl::shadeKernel(const BrdfD
   auto kernel = createComputeKernel((*code)->words);
   if (!kernel) return kernel.takeError();
   ++pipelinesCreated_;
-  auto shade = std::make_shared<ShadeKernel>();
-  shade->kernel = std::move(kernel.value());
-  shade->params = program.params;
-  shade->programHash = program.hash;
-  kernelCache_.emplace(program.hash, shade);
+  auto compiled = std::make_shared<ShadeKernel>();
+  compiled->kernel = std::move(kernel.value());
+  compiled->params = program.params;
+  compiled->programHash = program.hash;
+  kernelCache_.emplace(program.hash, compiled);
   kernelOrder_.push_back(program.hash);
   evictOldest(kernelCache_, kernelOrder_);
-  return std::shared_ptr<const ShadeKernel>(shade);
+  return std::shared_ptr<const ShadeKernel>(compiled);
+}
+
+AssembledProgram RendererImpl::assembleCheckProgram(const BrdfDefinition& brdf) const {
+  ProgramSpec spec;
+  spec.brdf = &brdf;
+  for (const char* piece : {"lib/bindings.glsl", "lib/random.glsl", "lib/sampling.glsl", "lib/brdf_inputs.glsl"})
+    spec.commonChunks.push_back(sources_.get(piece));
+  spec.integrator = sources_.get("kernels/check.comp.glsl");
+  return assembleProgram(spec);
 }
 
 Result<std::shared_ptr<const GpuEnvironment>> RendererImpl::environment(const std::string& name) {

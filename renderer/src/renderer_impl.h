@@ -25,6 +25,7 @@ class RendererImpl final : public Renderer, public std::enable_shared_from_this<
   const DeviceInfo& device() const override { return ctx_->info(); }
   Result<CompileInfo> compileBrdf(const BrdfDefinition& brdf) override;
   Result<std::unique_ptr<RenderView>> createView() override;
+  Result<BrdfCheckReport> checkBrdf(const BrdfDefinition& brdf) override;
   RendererCounters counters() const override;
   std::vector<std::string> environmentNames() const override;
   std::vector<std::string> meshNames() const override;
@@ -62,6 +63,9 @@ class RendererImpl final : public Renderer, public std::enable_shared_from_this<
   // GLSL -> SPIR-V through the content-addressed cache (key: hash of source + compiler).
   Result<std::shared_ptr<const SpirvBinary>> spirv(ShaderStage stage, const std::string& source, bool* cached);
   AssembledProgram assembleShadeProgram(const BrdfDefinition& brdf, SamplingMode sampling, bool constantEnv) const;
+  AssembledProgram assembleCheckProgram(const BrdfDefinition& brdf) const;
+  // The pipeline of an assembled program; compiled once, then served from the cache.
+  Result<std::shared_ptr<const ShadeKernel>> compiledKernel(const AssembledProgram& program);
 
   std::unique_ptr<VkContext> ctx_;  // declared first: destroyed last
   ShaderSources sources_;

@@ -94,6 +94,22 @@ struct RendererCounters {
   uint64_t pipelinesCreated = 0; // shading pipelines built (each costs a driver JIT)
 };
 
+// Numeric checks of one BRDF on the device (issue 3 item 6), through a compute kernel that
+// evaluates the same BRDF() code the renderer shades with. Directions: a grid over view and
+// light polar angles up to 89.9 degrees and exactly 90, and azimuths; parameters: every
+// parameter at its minimum, maximum and default (one varied at a time, others at default).
+struct BrdfCheckReport {
+  uint64_t evaluations = 0;
+  uint64_t nanCount = 0;
+  uint64_t infCount = 0;
+  uint64_t negativeCount = 0;       // any channel < 0
+  double maxAlbedo = 0;             // largest directional albedo over view angles and settings
+  uint64_t albedoAboveOne = 0;      // (view angle, setting) pairs with albedo > 1.01
+  double maxReciprocityError = 0;   // max |f(L,V) - f(V,L)| / max(|f(L,V)|, |f(V,L)|, 1e-6)
+  double ms = 0;                    // wall time of the check
+  bool ok() const { return nanCount == 0 && infCount == 0 && negativeCount == 0; }
+};
+
 class Renderer {
  public:
   virtual ~Renderer() = default;
@@ -108,6 +124,9 @@ class Renderer {
   virtual Result<CompileInfo> compileBrdf(const BrdfDefinition& brdf) = 0;
 
   virtual Result<std::unique_ptr<RenderView>> createView() = 0;
+
+  // Runs the numeric checks above. Thread-safe; compiles the BRDF (CompileError on failure).
+  virtual Result<BrdfCheckReport> checkBrdf(const BrdfDefinition& brdf) = 0;
 
   virtual RendererCounters counters() const = 0;
 

@@ -1,0 +1,79 @@
+// Numeric checks of a BRDF (one dispatch per parameter setting). Each invocation takes one view
+// direction V of a grid (polar angles up to 89.9 degrees and exactly 90, four azimuths) in the
+// frame N = +z, X = +x, Y = +y, and
+//  - evaluates f(L, V) and f(V, L) over a grid of light directions with the same polar angles
+//    and eight azimuths: counts NaN, Inf and negative values, and the largest relative
+//    reciprocity error |f(L,V) - f(V,L)| / max(|f(L,V)|, |f(V,L)|, 1e-6);
+//  - estimates the directional albedo E(V) = integral f cos dL with 4096 cosine-weighted R2
+//    samples (estimator f * pi) and its standard error, so the host flags only significant
+//    excess over 1 (a grid cannot resolve near-delta lobes; their error bars say so).
+// Output per view: brdfa_accum[2v] = (nan, inf, negative, evaluations),
+//                  brdfa_accum[2v+1] = (albedo, its standard error, reciprocity error, 0),
+// albedo and error of the channel with the largest albedo.
+layout(local_size_x = 8, local_size_y = 1, local_size_z = 1) in;
+
+const int BRDFA_THETAS = 10;
+const float BRDFA_THETA_DEG[BRDFA_THETAS] = float[](0.0, 15.0, 30.0, 45.0, 60.0, 75.0, 85.0, 89.0, 89.9, 90.0);
+const uint BRDFA_VIEWS = 40u;  // 10 polar angles x 4 azimuths
+const uint BRDFA_ALBEDO_SAMPLES = 4096u;
+
+// Exactly on the horizon at 90 degrees: cos(radians(90.0)) is -4e-8 in float, below it.
+vec3 brdfa_checkDirection(float thetaDeg, float phi) {
+  float s = thetaDeg >= 90.0 ? 1.0 : sin(radians(thetaDeg));
+  float z = thetaDeg >= 90.0 ? 0.0 : cos(radians(thetaDeg));
+  return vec3(s * cos(phi), s * sin(phi), z);
+}
+
+void brdfa_tally(vec3 f, inout vec3 counts) {
+  if (any(isnan(f))) counts.x += 1.0;
+  else if (any(isinf(f))) counts.y += 1.0;
+  else if (any(lessThan(f, vec3(0.0)))) counts.z += 1.0;
+}
+
+bool brdfa_finite(vec3 f) { return !any(isnan(f)) && !any(isinf(f)); }
+
+void main() {
+  uint v = gl_GlobalInvocationID.x;
+  if (v >= BRDFA_VIEWS) return;
+  const vec3 N = vec3(0.0, 0.0, 1.0), X = vec3(1.0, 0.0, 0.0), Y = vec3(0.0, 1.0, 0.0);
+  vec3 V = brdfa_checkDirection(BRDFA_THETA_DEG[v % 10u], radians(45.0) * float(v / 10u));
+  texCoord = vec2(0.5);
+
+  vec3 counts = vec3(0.0);
+  float evaluations = 0.0;
+  float reciprocity = 0.0;
+  for (int t = 0; t < BRDFA_THETAS; ++t) {
+    for (int k = 0; k < 8; ++k) {
+      vec3 L = brdfa_checkDirection(BRDFA_THETA_DEG[t], radians(45.0) * float(k));
+      vec3 a = BRDF(L, V, N, X, Y);
+      vec3 b = BRDF(V, L, N, X, Y);
+      brdfa_tally(a, counts);
+      brdfa_tally(b, counts);
+      evaluations += 2.0;
+      if (brdfa_finite(a) && brdfa_finite(b)) {
+        vec3 scale = max(max(abs(a), abs(b)), vec3(1e-6));  // guard: both ~0 is no error
+        vec3 rel = abs(a - b) / scale;
+        reciprocity = max(reciprocity, max(rel.x, max(rel.y, rel.z)));
+      }
+    }
+  }
+
+  vec3 sum = vec3(0.0), sumSq = vec3(0.0);
+  for (uint i = 0u; i < BRDFA_ALBEDO_SAMPLES; ++i) {
+    float cosOverPdf;
+    vec3 L = brdfa_sampleCosineHemisphere(brdfa_sample2D(uvec2(0u), i), cosOverPdf);
+    vec3 f = BRDF(L, V, N, X, Y);
+    brdfa_tally(f, counts);
+    evaluations += 1.0;
+    if (!brdfa_finite(f)) continue;
+    vec3 w = f * cosOverPdf;
+    sum += w;
+    sumSq += w * w;
+  }
+  float n = float(BRDFA_ALBEDO_SAMPLES);
+  vec3 mean = sum / n;
+  vec3 stderr = sqrt(max(sumSq / n - mean * mean, vec3(0.0)) / (n - 1.0));
+  int c = mean.x >= mean.y && mean.x >= mean.z ? 0 : (mean.y >= mean.z ? 1 : 2);
+  brdfa_accum[2u * v] = vec4(counts, evaluations);
+  brdfa_accum[2u * v + 1u] = vec4(mean[c], stderr[c], reciprocity, 0.0);
+}

@@ -1,0 +1,101 @@
+// The numeric checks (Renderer::checkBrdf) on the real device: each check must catch its fault.
+#include <gtest/gtest.h>
+
+#include <fstream>
+#include <sstream>
+
+#include "brdfa/renderer.h"
+
+namespace brdfa {
+namespace {
+
+class BrdfCheck : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    RendererOptions options;
+    options.shaderDir = std::string(BRDFA_SOURCE_DIR) + "/shaders";
+    renderer_ = Renderer::create(options).value();
+  }
+  static void TearDownTestSuite() { renderer_.reset(); }
+
+  static BrdfCheckReport check(const std::string& text) {
+    auto def = parseBrdf(text);
+    EXPECT_TRUE(def.ok()) << (def.ok() ? "" : def.error().message);
+    auto report = renderer_->checkBrdf(def.value());
+    EXPECT_TRUE(report.ok()) << (report.ok() ? "" : report.error().message);
+    return report.ok() ? report.value() : BrdfCheckReport{};
+  }
+
+  static std::string builtin(const std::string& name) {
+    std::ifstream in(std::string(BRDFA_SOURCE_DIR) + "/shaders/brdfs/" + name + ".brdf");
+    std::stringstream s;
+    s << in.rdbuf();
+    return s.str();
+  }
+
+  // A file whose BRDF body is `body`, with one float parameter k in [0, 1] (default 0.5).
+  static std::string withBody(const std::string& body) {
+    return "analytic\n::begin parameters\nfloat k 0 1 0.5\n::end parameters\n::begin shader\n"
+           "const float PI = 3.14159265358979323846;\n"
+           "vec3 BRDF(vec3 L, vec3 V, vec3 N, vec3 X, vec3 Y) {\n" + body + "\n}\n::end shader\n";
+  }
+
+  static inline std::shared_ptr<Renderer> renderer_;
+};
+
+TEST_F(BrdfCheck, LambertIsCleanReciprocalAndAtMostOne) {
+  BrdfCheckReport r = check(builtin("lambert"));
+  EXPECT_TRUE(r.ok());
+  // 3 settings (default, Kd black, Kd white) x 40 views x (160 grid + 4096 albedo) evaluations.
+  EXPECT_EQ(r.evaluations, 3u * 40u * (160u + 4096u));
+  EXPECT_EQ(r.maxReciprocityError, 0.0);
+  EXPECT_NEAR(r.maxAlbedo, 1.0, 1e-5);  // Kd = 1 reflects everything, exactly
+  EXPECT_EQ(r.albedoAboveOne, 0u);
+}
+
+TEST_F(BrdfCheck, GgxIsCleanAndReciprocalAcrossItsExtremes) {
+  BrdfCheckReport r = check(builtin("ggx"));
+  EXPECT_EQ(r.nanCount, 0u);
+  EXPECT_EQ(r.infCount, 0u);
+  EXPECT_EQ(r.negativeCount, 0u);
+  EXPECT_LT(r.maxReciprocityError, 1e-4);
+  EXPECT_EQ(r.albedoAboveOne, 0u);
+}
+
+TEST_F(BrdfCheck, CatchesNaN) {
+  BrdfCheckReport r = check(withBody("return vec3(sqrt(dot(L, V) - 1.0 - k));"));
+  EXPECT_GT(r.nanCount, 0u);
+  EXPECT_FALSE(r.ok());
+}
+
+TEST_F(BrdfCheck, CatchesInfinityAtGrazingAngles) {
+  BrdfCheckReport r = check(withBody("return vec3(k / (dot(N, L) * dot(N, V)));"));
+  EXPECT_GT(r.infCount, 0u);  // exactly 90 degrees is on the grid
+}
+
+TEST_F(BrdfCheck, CatchesNegativeValues) {
+  BrdfCheckReport r = check(withBody("return vec3(dot(L, X) * k);"));
+  EXPECT_GT(r.negativeCount, 0u);
+}
+
+TEST_F(BrdfCheck, CatchesNonReciprocity) {
+  BrdfCheckReport r = check(withBody("return vec3(k + max(dot(N, V), 0.0)) / PI;"));
+  EXPECT_GT(r.maxReciprocityError, 0.1);
+}
+
+TEST_F(BrdfCheck, CatchesEnergyGain) {
+  BrdfCheckReport r = check(withBody("return vec3((1.0 + k) / PI);"));  // albedo 1 + k
+  EXPECT_NEAR(r.maxAlbedo, 2.0, 1e-4);  // at k = max
+  EXPECT_GT(r.albedoAboveOne, 0u);
+}
+
+TEST_F(BrdfCheck, CompileErrorsAreReported) {
+  auto def = parseBrdf(withBody("return nope;"));
+  ASSERT_TRUE(def.ok());
+  auto r = renderer_->checkBrdf(def.value());
+  ASSERT_FALSE(r.ok());
+  EXPECT_EQ(r.error().code, ErrorCode::CompileError);
+}
+
+}  // namespace
+}  // namespace brdfa
