@@ -1,5 +1,5 @@
-// Numeric checks of a BRDF on the device (see BrdfCheckReport in renderer.h and
-// shaders/kernels/check.comp.glsl).
+// Numeric checks of a BRDF and of its sampler on the device (BrdfCheckReport and
+// SamplerCheckReport in renderer.h; shaders/kernels/check*.comp.glsl).
 #include <chrono>
 #include <cmath>
 #include <cstring>
@@ -12,6 +12,9 @@ namespace brdfa {
 namespace {
 
 constexpr uint32_t kViews = 40;  // BRDFA_VIEWS in check.comp.glsl
+// check_sampler.comp.glsl: 4 views x 32 chunks of 2048 samples, 128 cells + 2 summary vec4.
+constexpr uint32_t kSamplerViews = 4, kSamplerChunks = 32, kChunkSamples = 2048, kCells = 128;
+constexpr uint32_t kSamplerStride = kCells + 2;
 
 // The parameter settings checked: all defaults, then each parameter alone at its minimum and
 // its maximum (colors at black and white, bools at false and true).
@@ -27,35 +30,46 @@ std::vector<std::map<std::string, Vec3>> checkSettings(const BrdfDefinition& brd
   return settings;
 }
 
-// Plain Vulkan objects of one check, released however the check ends.
-struct CheckResources {
+struct PoolOwner {
   VkDevice device = VK_NULL_HANDLE;
   VkDescriptorPool pool = VK_NULL_HANDLE;
-  ~CheckResources() {
+  ~PoolOwner() {
     if (pool) vkDestroyDescriptorPool(device, pool, nullptr);
   }
 };
 
+// z-score of a mean estimated from n samples with the given sums against `expected`.
+double zScore(double sum, double sumSq, double n, double expected) {
+  double mean = sum / n;
+  double var = std::max(sumSq / n - mean * mean, 0.0) / std::max(n - 1.0, 1.0);
+  double diff = mean - expected;
+  if (var <= 0) return diff == 0 ? 0 : INFINITY;
+  return std::fabs(diff) / std::sqrt(var);
+}
+
 }  // namespace
 
-Result<BrdfCheckReport> RendererImpl::checkBrdf(const BrdfDefinition& brdf) {
-  const auto t0 = std::chrono::steady_clock::now();
+Result<void> RendererImpl::runCheckKernel(const BrdfDefinition& brdf, const char* kernelName, uint32_t invocations,
+                                          uint32_t outputVec4s,
+                                          const std::vector<std::map<std::string, Vec3>>& settings,
+                                          const std::function<void(const float*)>& consume) {
   if (brdf.format == BrdfFormat::Legacy)
     return makeError(ErrorCode::Unsupported, "legacy render() BRDFs are rendered, not analysed");
-  auto kernel = compiledKernel(assembleCheckProgram(brdf));
+  auto kernel = compiledKernel(assembleCheckProgram(brdf, kernelName));
   if (!kernel) return kernel.takeError();
   const ParamBlockLayout& layout = (*kernel)->params;
-
   VkContext& ctx = *ctx_;
-  auto output = Buffer::create(ctx, kViews * 2 * 16, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, true);
+  auto output = Buffer::create(ctx, VkDeviceSize(outputVec4s) * 16, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, true);
   if (!output) return output.takeError();
   auto params = Buffer::create(ctx, layout.size, VK_BUFFER_USAGE_UNIFORM_BUFFER_BIT, true);
   if (!params) return params.takeError();
   auto cmd = CommandContext::create(ctx);
   if (!cmd) return cmd.takeError();
+  auto furnace = environment("furnace");
+  if (!furnace) return furnace.takeError();
 
   // Set 0 carries the output in the accumulator binding (3); set 1 the parameter block.
-  CheckResources res;
+  PoolOwner res;
   res.device = ctx.device();
   VkDescriptorPoolSize sizes[3] = {{VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 6},
                                    {VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, 1},
@@ -75,8 +89,6 @@ Result<BrdfCheckReport> RendererImpl::checkBrdf(const BrdfDefinition& brdf) {
   // Every binding gets a valid resource, used or not: lavapipe reads all bindings of a bound
   // set at dispatch and crashed on unwritten ones. The output stands in for the unused storage
   // buffers, the furnace for the environment, the parameters for the unused transform.
-  auto furnace = environment("furnace");
-  if (!furnace) return furnace.takeError();
   VkDescriptorBufferInfo outInfo{output->handle(), 0, VK_WHOLE_SIZE};
   VkDescriptorBufferInfo paramInfo{params->handle(), 0, VK_WHOLE_SIZE};
   VkDescriptorImageInfo envInfo{envSampler_, (*furnace)->cube.view(), VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL};
@@ -91,19 +103,26 @@ Result<BrdfCheckReport> RendererImpl::checkBrdf(const BrdfDefinition& brdf) {
                       VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, nullptr, &paramInfo, nullptr});
   vkUpdateDescriptorSets(ctx.device(), static_cast<uint32_t>(writes.size()), writes.data(), 0, nullptr);
 
-  BrdfCheckReport report;
-  for (const auto& setting : checkSettings(brdf)) {
+  for (const auto& setting : settings) {
     std::vector<uint8_t> packed = layout.pack(brdf, setting);
     std::memcpy(params->mapped(), packed.data(), packed.size());
     auto cb = cmd->begin();
     if (!cb) return cb.takeError();
     vkCmdBindPipeline(*cb, VK_PIPELINE_BIND_POINT_COMPUTE, (*kernel)->kernel->pipeline());
     vkCmdBindDescriptorSets(*cb, VK_PIPELINE_BIND_POINT_COMPUTE, computeLayout_, 0, 2, sets, 0, nullptr);
-    vkCmdDispatch(*cb, (kViews + 7) / 8, 1, 1);
+    vkCmdDispatch(*cb, (invocations + 7) / 8, 1, 1);
     memoryBarrier(*cb, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_ACCESS_SHADER_WRITE_BIT, VK_PIPELINE_STAGE_HOST_BIT,
                   VK_ACCESS_HOST_READ_BIT);
     BRDFA_TRY(cmd->submitAndWait());
-    const auto* out = static_cast<const float*>(output->mapped());
+    consume(static_cast<const float*>(output->mapped()));
+  }
+  return {};
+}
+
+Result<BrdfCheckReport> RendererImpl::checkBrdf(const BrdfDefinition& brdf) {
+  const auto t0 = std::chrono::steady_clock::now();
+  BrdfCheckReport report;
+  auto ran = runCheckKernel(brdf, "check.comp.glsl", kViews, kViews * 2, checkSettings(brdf), [&](const float* out) {
     for (uint32_t v = 0; v < kViews; ++v) {
       const float* counts = out + 8 * v;
       const float* albedo = counts + 4;
@@ -117,8 +136,59 @@ Result<BrdfCheckReport> RendererImpl::checkBrdf(const BrdfDefinition& brdf) {
       if (albedo[0] - 3.0 * albedo[1] > 1.01) ++report.albedoAboveOne;
       report.maxReciprocityError = std::max(report.maxReciprocityError, double(albedo[2]));
     }
-  }
+  });
+  if (!ran) return ran.takeError();
   report.ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+  return report;
+}
+
+Result<SamplerCheckReport> RendererImpl::checkSampler(const BrdfDefinition& brdf) {
+  if (!brdf.hasSampler()) return makeError(ErrorCode::InvalidArgument, "the BRDF has no '::begin sample' section");
+  SamplerCheckReport report;
+  const uint32_t invocations = kSamplerViews * kSamplerChunks;
+  const double perView = double(kSamplerChunks) * kChunkSamples;
+  const double cellSolidAngle = 2.0 * 3.14159265358979323846 / kCells;
+  auto ran = runCheckKernel(brdf, "check_sampler.comp.glsl", invocations, invocations * kSamplerStride, {{}},
+                            [&](const float* out) {
+    for (uint32_t view = 0; view < kSamplerViews; ++view) {
+      std::vector<double> cells(3 * kCells, 0.0);
+      double albedo[4] = {0, 0, 0, 0};  // sampled sum, sum of squares; cosine sum, sum of squares
+      for (uint32_t chunk = 0; chunk < kSamplerChunks; ++chunk) {
+        const float* base = out + 4 * size_t((view * kSamplerChunks + chunk) * kSamplerStride);
+        for (uint32_t c = 0; c < kCells; ++c)
+          for (int k = 0; k < 3; ++k) cells[3 * c + k] += base[4 * c + k];
+        const float* summary = base + 4 * kCells;
+        report.rejected += static_cast<uint64_t>(summary[0]);
+        report.maxValueMismatch = std::max(report.maxValueMismatch, double(summary[1]));
+        albedo[0] += summary[2];
+        albedo[1] += summary[3];
+        albedo[2] += summary[4];
+        albedo[3] += summary[5];
+      }
+      report.samples += static_cast<uint64_t>(perView);
+      for (uint32_t c = 0; c < kCells; ++c) {
+        if (cells[3 * c] < 100) continue;  // too few samples to say anything
+        // Cells of the two rows next to the horizon (cos theta < 1/4) are left out: where the
+        // horizon cuts a lobe (grazing views), 1/pdf is so heavy-tailed that finite-sample
+        // means and their error bars are unreliable (correct samplers read 30-75% low there).
+        // The albedo comparison still covers those directions.
+        if (c / 16 < 2) continue;
+        ++report.cellsTested;
+        report.maxCellZ = std::max(report.maxCellZ, zScore(cells[3 * c + 1], cells[3 * c + 2], perView, cellSolidAngle));
+      }
+      // Two independent estimates of one albedo: z of their difference.
+      auto meanVar = [&](double sum, double sumSq) {
+        double mean = sum / perView;
+        return std::pair<double, double>(mean, std::max(sumSq / perView - mean * mean, 0.0) / (perView - 1));
+      };
+      auto [ms, vs] = meanVar(albedo[0], albedo[1]);
+      auto [mc, vc] = meanVar(albedo[2], albedo[3]);
+      double sd = std::sqrt(vs + vc);
+      double z = sd > 0 ? std::fabs(ms - mc) / sd : (ms == mc ? 0.0 : INFINITY);
+      report.maxAlbedoZ = std::max(report.maxAlbedoZ, z);
+    }
+  });
+  if (!ran) return ran.takeError();
   return report;
 }
 

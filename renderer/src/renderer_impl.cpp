@@ -309,11 +309,17 @@ Result<std::shared_ptr<const SpirvBinary>> RendererImpl::spirv(ShaderStage stage
 
 AssembledProgram RendererImpl::assembleShadeProgram(const BrdfDefinition& brdf, SamplingMode sampling,
                                                     bool constantEnv) const {
+  // The file's sampler is compiled in only where it is used: its code would otherwise count
+  // towards the features the program needs (brdf_features.cpp).
+  const bool useSampler = sampling == SamplingMode::Brdf && brdf.hasSampler();
+  BrdfDefinition used = brdf;
+  if (!useSampler) used.sampleShader.clear();
   ProgramSpec spec;
-  spec.brdf = &brdf;
-  spec.defines = {sampling == SamplingMode::Uniform ? "BRDFA_SAMPLING_UNIFORM" : "BRDFA_SAMPLING_COSINE",
+  spec.brdf = &used;
+  spec.defines = {useSampler ? "BRDFA_SAMPLING_BRDF"
+                  : sampling == SamplingMode::Uniform ? "BRDFA_SAMPLING_UNIFORM" : "BRDFA_SAMPLING_COSINE",
                   constantEnv ? "BRDFA_ENV_CONSTANT" : "BRDFA_ENV_CUBEMAP"};
-  if (detectFeatures(brdf).tangentFrame) spec.defines.push_back("BRDFA_TANGENT_FRAME");
+  if (detectFeatures(used).tangentFrame) spec.defines.push_back("BRDFA_TANGENT_FRAME");
   for (const char* piece : {"lib/bindings.glsl", "lib/random.glsl", "lib/frame.glsl", "lib/sampling.glsl",
                             "lib/environment.glsl", "lib/brdf_inputs.glsl"})
     spec.commonChunks.push_back(sources_.get(piece));
@@ -324,7 +330,8 @@ AssembledProgram RendererImpl::assembleShadeProgram(const BrdfDefinition& brdf, 
 Result<CompileInfo> RendererImpl::compileBrdf(const BrdfDefinition& brdf) {
   if (brdf.format == BrdfFormat::Legacy)
     return makeError(ErrorCode::Unsupported, "legacy render() BRDFs are not supported yet");
-  AssembledProgram program = assembleShadeProgram(brdf, SamplingMode::Cosine, false);
+  // With its sampler when it has one, so a broken sample section is reported at validation.
+  AssembledProgram program = assembleShadeProgram(brdf, SamplingMode::Brdf, false);
   CompileInfo info;
   auto code = spirv(ShaderStage::Compute, program.source, &info.cached);
   if (!code) return code.takeError();
@@ -361,12 +368,12 @@ Result<std::shared_ptr<const ShadeKernel>> RendererImpl::compiledKernel(const As
   return std::shared_ptr<const ShadeKernel>(compiled);
 }
 
-AssembledProgram RendererImpl::assembleCheckProgram(const BrdfDefinition& brdf) const {
+AssembledProgram RendererImpl::assembleCheckProgram(const BrdfDefinition& brdf, const char* kernel) const {
   ProgramSpec spec;
   spec.brdf = &brdf;
   for (const char* piece : {"lib/bindings.glsl", "lib/random.glsl", "lib/sampling.glsl", "lib/brdf_inputs.glsl"})
     spec.commonChunks.push_back(sources_.get(piece));
-  spec.integrator = sources_.get("kernels/check.comp.glsl");
+  spec.integrator = sources_.get(std::string("kernels/") + kernel);
   return assembleProgram(spec);
 }
 

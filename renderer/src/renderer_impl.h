@@ -4,6 +4,7 @@
 
 #include <atomic>
 #include <deque>
+#include <functional>
 #include <map>
 #include <memory>
 #include <mutex>
@@ -26,6 +27,7 @@ class RendererImpl final : public Renderer, public std::enable_shared_from_this<
   Result<CompileInfo> compileBrdf(const BrdfDefinition& brdf) override;
   Result<std::unique_ptr<RenderView>> createView() override;
   Result<BrdfCheckReport> checkBrdf(const BrdfDefinition& brdf) override;
+  Result<SamplerCheckReport> checkSampler(const BrdfDefinition& brdf) override;
   RendererCounters counters() const override;
   std::vector<std::string> environmentNames() const override;
   std::vector<std::string> meshNames() const override;
@@ -63,7 +65,13 @@ class RendererImpl final : public Renderer, public std::enable_shared_from_this<
   // GLSL -> SPIR-V through the content-addressed cache (key: hash of source + compiler).
   Result<std::shared_ptr<const SpirvBinary>> spirv(ShaderStage stage, const std::string& source, bool* cached);
   AssembledProgram assembleShadeProgram(const BrdfDefinition& brdf, SamplingMode sampling, bool constantEnv) const;
-  AssembledProgram assembleCheckProgram(const BrdfDefinition& brdf) const;
+  // A check kernel (kernels/<kernel>) specialized to `brdf`.
+  AssembledProgram assembleCheckProgram(const BrdfDefinition& brdf, const char* kernel) const;
+  // Runs a check kernel once per entry of `settings` over `invocations` invocations with an
+  // output of `outputVec4s` vec4; `consume` reads the output after each run.
+  Result<void> runCheckKernel(const BrdfDefinition& brdf, const char* kernel, uint32_t invocations,
+                              uint32_t outputVec4s, const std::vector<std::map<std::string, Vec3>>& settings,
+                              const std::function<void(const float*)>& consume);
   // The pipeline of an assembled program; compiled once, then served from the cache.
   Result<std::shared_ptr<const ShadeKernel>> compiledKernel(const AssembledProgram& program);
 

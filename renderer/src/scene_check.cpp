@@ -15,6 +15,23 @@ bool finite3(const Vec3& v) { return std::isfinite(v[0]) && std::isfinite(v[1]) 
 
 }  // namespace
 
+const char* samplingModeName(SamplingMode mode) {
+  switch (mode) {
+    case SamplingMode::Uniform: return "uniform";
+    case SamplingMode::Brdf: return "brdf";
+    default: return "cosine";
+  }
+}
+
+bool samplingModeFromName(const std::string& name, SamplingMode& mode) {
+  for (SamplingMode m : {SamplingMode::Cosine, SamplingMode::Uniform, SamplingMode::Brdf})
+    if (name == samplingModeName(m)) {
+      mode = m;
+      return true;
+    }
+  return false;
+}
+
 Result<void> checkScene(const Scene& s) {
   const RenderSettings& r = s.render;
   if (r.width < kMinImageSize || r.width > kMaxImageSize)

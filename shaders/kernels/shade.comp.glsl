@@ -1,7 +1,7 @@
 // The integrator: Monte Carlo estimate of reflected radiance for one object's pixels,
 //   L_o(V) = 1/N * sum_k f(L_k, V) * L_env(L_k) * max(0, N.L_k) / pdf(L_k),
-// with L_k from the hemisphere sampler of this program (cosine-weighted or uniform; both
-// unbiased). Samples that are NaN or Inf are dropped and counted, never accumulated, and the
+// with L_k from the sampler of this program (cosine-weighted, uniform, or the BRDF file's own
+// sampleBRDF(); all unbiased). Samples that are NaN or Inf are dropped and counted, never accumulated, and the
 // pixel's mean divides by the samples kept.
 
 layout(local_size_x = 8, local_size_y = 8, local_size_z = 1) in;
@@ -41,10 +41,20 @@ void main() {
   vec3 sum = vec3(0.0);
   uint dropped = 0u;
   for (uint s = 0u; s < count; ++s) {
+#if defined(BRDFA_SAMPLING_BRDF)
+    // The file's own importance sampler: it returns f(L, V) and the solid-angle pdf of L.
+    vec3 L;
+    float pdf;
+    vec3 f = sampleBRDF(brdfa_sample2D(rotation, first + s), V, N, X, Y, L, pdf);
+    // guard: pdf = 0 marks a direction the sampler rejected (below the horizon): it
+    // contributes 0, and dividing would give 0/0.
+    vec3 c = pdf > 0.0 ? f * brdfa_environmentUnit(L) * (max(dot(N, L), 0.0) / pdf) : vec3(0.0);
+#else
     float weight;  // cos / pdf
     vec3 l = brdfa_sampleHemisphere(brdfa_sample2D(rotation, first + s), weight);
     vec3 L = X * l.x + Y * l.y + N * l.z;
     vec3 c = BRDF(L, V, N, X, Y) * brdfa_environmentUnit(L) * weight;
+#endif
     // guard: a NaN or infinite channel makes the channel sum NaN or infinite, so one test of
     // the sum drops the sample (a finite sum that overflows float is dropped as infinite too).
     float channels = c.x + c.y + c.z;

@@ -110,6 +110,24 @@ struct BrdfCheckReport {
   bool ok() const { return nanCount == 0 && infCount == 0 && negativeCount == 0; }
 };
 
+// Checks of a file's sampleBRDF() (issue 3): 65536 samples for each of 4 view directions
+// (0, 30, 60, 80 degrees) at default parameters. A file gives no pdf for arbitrary directions,
+// so the test uses what must hold if the reported pdf is the density of the samples: over 128
+// cells of equal solid angle, the mean of 1_cell / pdf equals the cell's solid angle
+// (z-scores; cells with cos(theta) >= 1/4, see brdf_check.cpp); the importance-sampled albedo E[f cos / pdf] equals a cosine-sampled estimate
+// (a sampler that misses part of the lobe fails this); and the returned value equals BRDF().
+struct SamplerCheckReport {
+  uint64_t samples = 0;
+  uint64_t rejected = 0;          // pdf = 0, or L below the horizon
+  double maxValueMismatch = 0;    // max relative |returned f - BRDF(L, V)|
+  uint32_t cellsTested = 0;       // cells with enough samples to test
+  double maxCellZ = 0;            // largest |z| of a cell's solid-angle estimate
+  double maxAlbedoZ = 0;          // largest |z| of sampled vs cosine albedo over the views
+  bool passed(double zLimit = 5.0) const {
+    return maxValueMismatch < 1e-3 && maxCellZ < zLimit && maxAlbedoZ < zLimit;
+  }
+};
+
 class Renderer {
  public:
   virtual ~Renderer() = default;
@@ -127,6 +145,9 @@ class Renderer {
 
   // Runs the numeric checks above. Thread-safe; compiles the BRDF (CompileError on failure).
   virtual Result<BrdfCheckReport> checkBrdf(const BrdfDefinition& brdf) = 0;
+
+  // Runs the sampler checks above; InvalidArgument when the file has no sample section.
+  virtual Result<SamplerCheckReport> checkSampler(const BrdfDefinition& brdf) = 0;
 
   virtual RendererCounters counters() const = 0;
 

@@ -25,9 +25,12 @@ struct EnvironmentSettings {
   bool visible = true;    // drawn as the background
 };
 
-// How the integrator draws directions. Both are unbiased: f * L * cos / pdf.
-enum class SamplingMode { Cosine, Uniform };
-const char* samplingModeName(SamplingMode mode);
+// How the integrator draws directions. All are unbiased: f * L * cos / pdf.
+//   Cosine, Uniform: over the hemisphere. Brdf: the file's own sampleBRDF() (importance
+//   sampling); for a BRDF without a `::begin sample` section it falls back to Cosine.
+enum class SamplingMode { Cosine, Uniform, Brdf };
+const char* samplingModeName(SamplingMode mode);  // "cosine" | "uniform" | "brdf"
+bool samplingModeFromName(const std::string& name, SamplingMode& mode);  // false if unknown
 
 struct RenderSettings {
   int width = 512;
