@@ -5,6 +5,8 @@
 #include <fstream>
 #include <sstream>
 
+#include "brdfa_server/atomic_file.h"
+
 namespace brdfa::server {
 
 bool isReservedBrdfName(std::string_view name) { return name == "inline" || name == "validate"; }
@@ -16,16 +18,42 @@ bool isValidBrdfName(std::string_view name) {
   });
 }
 
-std::vector<std::string> BrdfLibrary::loadBuiltins(const std::string& dir) {
+namespace {
+
+// One *.brdf file read and parsed. `entry` on success, else `broken` (parse error) or, for
+// files not to be listed at all, only a message.
+struct LoadedFile {
+  std::shared_ptr<BrdfEntry> entry;
+  std::optional<BrokenBrdf> broken;
+};
+
+bool readWholeFile(const std::filesystem::path& path, std::string& out) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) return false;
+  std::ostringstream text;
+  text << in.rdbuf();
+  if (in.bad()) return false;
+  out = text.str();
+  return true;
+}
+
+std::string errorText(const Error& e) {
+  std::string msg = e.message;
+  for (const Diagnostic& d : e.diagnostics) msg += "\n  line " + std::to_string(d.line) + ": " + d.message;
+  return msg;
+}
+
+// Calls `fn(name, path)` for every regular <dir>/<name>.brdf with a valid name (messages for
+// the others). False when the folder cannot be read.
+template <class Fn>
+bool forEachBrdfFile(const std::string& dir, std::vector<std::string>& messages, Fn fn) {
   namespace fs = std::filesystem;
-  std::vector<std::string> messages;
   std::error_code ec;
   fs::directory_iterator it(dir, ec);
   if (ec) {
     messages.push_back("cannot read BRDF directory " + dir + ": " + ec.message());
-    return messages;
+    return false;
   }
-  std::map<std::string, std::shared_ptr<const BrdfEntry>, std::less<>> loaded;
   for (const fs::directory_entry& file : it) {
     const fs::path& path = file.path();
     if (path.extension() != ".brdf" || !file.is_regular_file(ec)) continue;
@@ -34,31 +62,100 @@ std::vector<std::string> BrdfLibrary::loadBuiltins(const std::string& dir) {
       messages.push_back("skipping " + path.string() + ": not a valid BRDF name");
       continue;
     }
-    std::ifstream in(path, std::ios::binary);
-    std::ostringstream text;
-    text << in.rdbuf();
-    if (!in) {
+    fn(name, path);
+  }
+  return true;
+}
+
+}  // namespace
+
+std::vector<std::string> BrdfLibrary::loadBuiltins(const std::string& dir) {
+  std::vector<std::string> messages;
+  std::map<std::string, std::shared_ptr<const BrdfEntry>, std::less<>> loaded;
+  forEachBrdfFile(dir, messages, [&](const std::string& name, const std::filesystem::path& path) {
+    std::string text;
+    if (!readWholeFile(path, text)) {
       messages.push_back("skipping " + path.string() + ": cannot read");
-      continue;
+      return;
     }
-    Result<BrdfDefinition> parsed = parseBrdf(text.str());
+    Result<BrdfDefinition> parsed = parseBrdf(text);
     if (!parsed) {
-      std::string msg = "skipping " + path.string() + ": " + parsed.error().message;
-      for (const Diagnostic& d : parsed.error().diagnostics)
-        msg += "\n  line " + std::to_string(d.line) + ": " + d.message;
-      messages.push_back(msg);
-      continue;
+      messages.push_back("skipping " + path.string() + ": " + errorText(parsed.error()));
+      return;
     }
     auto entry = std::make_shared<BrdfEntry>();
     entry->name = name;
-    entry->source = text.str();
+    entry->source = std::move(text);
     entry->definition = std::make_shared<const BrdfDefinition>(std::move(parsed.value()));
     entry->builtin = true;
     loaded[name] = std::move(entry);
-  }
+  });
   std::lock_guard lock(mutex_);
   for (auto& [name, entry] : loaded) entries_[name] = entry;
   return messages;
+}
+
+std::vector<std::string> BrdfLibrary::loadUserDir(const std::string& dir) {
+  std::vector<std::string> messages;
+  std::error_code ec;
+  std::filesystem::create_directories(dir, ec);
+  if (ec) messages.push_back("cannot create user BRDF directory " + dir + ": " + ec.message());
+  if (int n = removeStaleTempFiles(dir); n > 0)
+    messages.push_back("removed " + std::to_string(n) + " unfinished temp file(s) from " + dir);
+  {
+    std::lock_guard store(storeMutex_);
+    userDir_ = dir;
+  }
+  std::map<std::string, std::shared_ptr<const BrdfEntry>, std::less<>> loaded;
+  std::map<std::string, BrokenBrdf, std::less<>> broken;
+  forEachBrdfFile(dir, messages, [&](const std::string& name, const std::filesystem::path& path) {
+    if (find(name) && find(name)->builtin) {
+      messages.push_back("skipping " + path.string() + ": a built-in BRDF has that name");
+      return;
+    }
+    std::string text;
+    if (!readWholeFile(path, text)) {
+      messages.push_back("user BRDF " + path.string() + " cannot be read; listed as broken");
+      broken[name] = BrokenBrdf{name, "", makeError(ErrorCode::Internal, "cannot read " + path.string())};
+      return;
+    }
+    Result<BrdfDefinition> parsed = parseBrdf(text);
+    if (!parsed) {
+      messages.push_back("user BRDF " + path.string() + " does not parse; listed as broken: " +
+                         errorText(parsed.error()));
+      broken[name] = BrokenBrdf{name, std::move(text), parsed.takeError()};
+      return;
+    }
+    auto entry = std::make_shared<BrdfEntry>();
+    entry->name = name;
+    entry->source = std::move(text);
+    entry->definition = std::make_shared<const BrdfDefinition>(std::move(parsed.value()));
+    entry->builtin = false;
+    loaded[name] = std::move(entry);
+  });
+  std::lock_guard lock(mutex_);
+  for (auto& [name, entry] : loaded) entries_[name] = entry;
+  for (auto& [name, b] : broken) broken_[name] = std::move(b);
+  return messages;
+}
+
+std::string BrdfLibrary::userFilePath(std::string_view name) const {
+  if (userDir_.empty()) return {};
+  return (std::filesystem::path(userDir_) / (std::string(name) + ".brdf")).string();
+}
+
+std::vector<BrokenBrdf> BrdfLibrary::listBroken() const {
+  std::lock_guard lock(mutex_);
+  std::vector<BrokenBrdf> out;
+  for (const auto& [name, b] : broken_) out.push_back(b);
+  return out;
+}
+
+std::optional<BrokenBrdf> BrdfLibrary::findBroken(std::string_view name) const {
+  std::lock_guard lock(mutex_);
+  auto it = broken_.find(name);
+  if (it == broken_.end()) return std::nullopt;
+  return it->second;
 }
 
 std::shared_ptr<const BrdfEntry> BrdfLibrary::find(std::string_view name) const {
@@ -76,7 +173,21 @@ std::vector<std::shared_ptr<const BrdfEntry>> BrdfLibrary::list() const {
 }
 
 BrdfLibrary::PutOutcome BrdfLibrary::putUser(std::string name, std::string source,
-                                             std::shared_ptr<const BrdfDefinition> def) {
+                                             std::shared_ptr<const BrdfDefinition> def, Error* storeError) {
+  std::lock_guard store(storeMutex_);
+  {
+    std::lock_guard lock(mutex_);
+    auto it = entries_.find(name);
+    if (it != entries_.end() && it->second->builtin) return PutOutcome::BuiltinConflict;
+  }
+  // Built-ins never change after start-up, so the check above still holds after the write.
+  if (!userDir_.empty()) {
+    Result<void> written = writeFileAtomically(userFilePath(name), source);
+    if (!written) {
+      if (storeError) *storeError = written.error();
+      return PutOutcome::StoreFailed;
+    }
+  }
   auto entry = std::make_shared<BrdfEntry>();
   entry->name = name;
   entry->source = std::move(source);
@@ -84,18 +195,30 @@ BrdfLibrary::PutOutcome BrdfLibrary::putUser(std::string name, std::string sourc
   entry->builtin = false;
   std::lock_guard lock(mutex_);
   auto it = entries_.find(name);
-  if (it != entries_.end() && it->second->builtin) return PutOutcome::BuiltinConflict;
-  PutOutcome outcome = it == entries_.end() ? PutOutcome::Created : PutOutcome::Replaced;
+  PutOutcome outcome = it == entries_.end() && !broken_.count(name) ? PutOutcome::Created : PutOutcome::Replaced;
+  broken_.erase(name);
   entries_[std::move(name)] = std::move(entry);
   return outcome;
 }
 
-BrdfLibrary::RemoveOutcome BrdfLibrary::remove(std::string_view name) {
+BrdfLibrary::RemoveOutcome BrdfLibrary::remove(std::string_view name, Error* storeError) {
+  std::lock_guard store(storeMutex_);
+  {
+    std::lock_guard lock(mutex_);
+    auto it = entries_.find(name);
+    if (it != entries_.end() && it->second->builtin) return RemoveOutcome::Builtin;
+    if (it == entries_.end() && !broken_.count(name)) return RemoveOutcome::NotFound;
+  }
+  if (!userDir_.empty()) {
+    Result<void> removed = removeFileDurably(userFilePath(name));
+    if (!removed && removed.error().code != ErrorCode::NotFound) {
+      if (storeError) *storeError = removed.error();
+      return RemoveOutcome::StoreFailed;
+    }
+  }
   std::lock_guard lock(mutex_);
-  auto it = entries_.find(name);
-  if (it == entries_.end()) return RemoveOutcome::NotFound;
-  if (it->second->builtin) return RemoveOutcome::Builtin;
-  entries_.erase(it);
+  if (auto it = entries_.find(name); it != entries_.end()) entries_.erase(it);
+  if (auto it = broken_.find(name); it != broken_.end()) broken_.erase(it);
   return RemoveOutcome::Removed;
 }
 

@@ -36,6 +36,7 @@ Result<std::unique_ptr<HttpServer>> HttpServer::create(const ServerConfig& confi
   registerBrdfRoutes(http, s);
   registerSessionRoutes(http, s);
   registerRenderRoutes(http, s);
+  registerJobRoutes(http, s);
   registerStaticRoutes(http, s);
   return out;
 }

@@ -16,6 +16,7 @@ void registerSystemRoutes(httplib::Server& server, Service& service);  // health
 void registerBrdfRoutes(httplib::Server& server, Service& service);
 void registerSessionRoutes(httplib::Server& server, Service& service);
 void registerRenderRoutes(httplib::Server& server, Service& service);
+void registerJobRoutes(httplib::Server& server, Service& service);  // batch tests
 void registerStaticRoutes(httplib::Server& server, Service& service);  // last: catch-all GET
 
 // Parses the body as JSON; on failure answers 400 bad_json and returns nullopt.

@@ -275,12 +275,8 @@ Result<void> parseRender(const json& j, RenderSettings& rs) {
   if (auto it = j.find("sampling"); it != j.end()) {
     Result<std::string> s = readString(*it, "render.sampling");
     if (!s) return s.takeError();
-    if (s.value() == "cosine")
-      rs.sampling = SamplingMode::Cosine;
-    else if (s.value() == "uniform")
-      rs.sampling = SamplingMode::Uniform;
-    else
-      return invalid("render.sampling", "must be \"cosine\" or \"uniform\", got \"" + s.value() + "\"");
+    if (!samplingModeFromName(s.value(), rs.sampling))
+      return invalid("render.sampling", "must be \"cosine\", \"uniform\" or \"brdf\", got \"" + s.value() + "\"");
   }
   BRDFA_CHECK(optionalField(j, "exposure", "render", rs.exposure,
                             [](const json& v, const std::string& f) { return readFloat(v, f, -40, 40); }));
@@ -288,6 +284,10 @@ Result<void> parseRender(const json& j, RenderSettings& rs) {
 }
 
 }  // namespace
+
+Result<Vec3> paramValueFromJson(const BrdfParam& param, const json& value, const std::string& field) {
+  return readParamValue(param, value, field);
+}
 
 Result<Scene> sceneFromJson(const json& j, const SceneResolver& r) {
   Scene scene;
@@ -352,7 +352,7 @@ json sceneToJson(const Scene& s) {
         {"height", s.render.height},
         {"samples_per_frame", s.render.samplesPerFrame},
         {"max_samples", s.render.maxSamples},
-        {"sampling", s.render.sampling == SamplingMode::Uniform ? "uniform" : "cosine"},
+        {"sampling", samplingModeName(s.render.sampling)},
         {"exposure", floatForJson(s.render.exposure)}}},
   };
 }

@@ -73,6 +73,8 @@ Result<std::unique_ptr<Service>> Service::create(const ServerConfig& config, std
   for (std::string& msg :
        service->library.loadBuiltins((std::filesystem::path(config.root) / "shaders" / "brdfs").string()))
     log.push_back("warning: " + msg);
+  for (std::string& msg : service->library.loadUserDir(service->userBrdfDir())) log.push_back("warning: " + msg);
+  service->jobs = std::make_unique<JobManager>(service->renderer);
 
   service->sessions = std::make_unique<SessionManager>(
       service->renderer, std::chrono::milliseconds(std::chrono::seconds(config.idleTimeoutSec)), kMaxSessions);
@@ -103,8 +105,15 @@ SceneResolver Service::resolver(std::shared_ptr<const BrdfDefinition> inlineBrdf
   return r;
 }
 
+std::string Service::userBrdfDir() const { return (std::filesystem::path(config.dataDir) / "brdfs").string(); }
+
+std::string Service::presetDir(const std::string& brdf) const {
+  return (std::filesystem::path(config.dataDir) / "presets" / brdf).string();
+}
+
 void Service::beginShutdown() {
   stopping = true;
+  if (jobs) jobs->stop();
   renderSlots.shutdown();
   if (sessions) sessions->stopAll();
 }

@@ -196,7 +196,9 @@ TEST_F(BuiltinLibrary, NumericChecksAreCleanAndReciprocalModelsAreSymmetric) {
     ASSERT_TRUE(report.ok()) << report.error().message;
     EXPECT_TRUE(report->ok()) << "nan " << report->nanCount << " inf " << report->infCount
                               << " negative " << report->negativeCount;
-    if (name != "phong") EXPECT_LT(report->maxReciprocityError, 1e-4);
+    if (name != "phong") {
+      EXPECT_LT(report->maxReciprocityError, 1e-4);
+    }
   }
 }
 

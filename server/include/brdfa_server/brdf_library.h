@@ -1,6 +1,7 @@
 // The named BRDFs a scene can refer to: read-only built-ins from <root>/shaders/brdfs/*.brdf
-// plus user BRDFs added over REST. Entries are immutable and shared: replacing a name swaps in
-// a new entry, so a scene that resolved the old one keeps a valid definition. Thread-safe.
+// plus user BRDFs added over REST and saved as <data dir>/brdfs/<name>.brdf. Entries are
+// immutable and shared: replacing a name swaps in a new entry, so a scene that resolved the old
+// one keeps a valid definition. Thread-safe.
 #pragma once
 
 #include <map>
@@ -9,6 +10,8 @@
 #include <string>
 #include <string_view>
 #include <vector>
+
+#include <optional>
 
 #include "brdfa/brdf.h"
 #include "brdfa/result.h"
@@ -20,6 +23,14 @@ struct BrdfEntry {
   std::string source;  // the .brdf text as submitted
   std::shared_ptr<const BrdfDefinition> definition;
   bool builtin = false;
+};
+
+// A saved user file that did not parse at start-up. Listed (with its error) so the user can see
+// and fix or delete it; scenes cannot use it. A PUT of the name replaces it.
+struct BrokenBrdf {
+  std::string name;
+  std::string source;
+  Error error;  // CompileError with diagnostics, or why the file could not be read
 };
 
 // Names a client may give a BRDF: [A-Za-z0-9_-]{1,64}, minus the reserved ones.
@@ -34,19 +45,39 @@ class BrdfLibrary {
   // to parse are skipped; one message per skipped file is returned for the log.
   std::vector<std::string> loadBuiltins(const std::string& dir);
 
+  // Makes `dir` the user store: removes stale temp files, then loads every <dir>/*.brdf as a
+  // user BRDF (parsed only). A file that fails to parse becomes a BrokenBrdf; a file named like
+  // a built-in (or not a valid name) is skipped. Later putUser/remove write to / unlink in `dir`.
+  // Returns one message per skipped or broken file for the log.
+  std::vector<std::string> loadUserDir(const std::string& dir);
+
   std::shared_ptr<const BrdfEntry> find(std::string_view name) const;
   std::vector<std::shared_ptr<const BrdfEntry>> list() const;  // sorted by name
 
-  enum class PutOutcome { Created, Replaced, BuiltinConflict };
-  // Stores a user BRDF unless a built-in holds that name (built-ins are read-only).
-  PutOutcome putUser(std::string name, std::string source, std::shared_ptr<const BrdfDefinition> def);
+  std::vector<BrokenBrdf> listBroken() const;  // sorted by name
+  std::optional<BrokenBrdf> findBroken(std::string_view name) const;
 
-  enum class RemoveOutcome { Removed, NotFound, Builtin };
-  RemoveOutcome remove(std::string_view name);
+  enum class PutOutcome { Created, Replaced, BuiltinConflict, StoreFailed };
+  // Stores a user BRDF unless a built-in holds that name (built-ins are read-only). With a user
+  // store, the file is written atomically first; when that fails (StoreFailed, `storeError` set)
+  // nothing changes.
+  PutOutcome putUser(std::string name, std::string source, std::shared_ptr<const BrdfDefinition> def,
+                     Error* storeError = nullptr);
+
+  enum class RemoveOutcome { Removed, NotFound, Builtin, StoreFailed };
+  // Removes a user BRDF (or a broken one) and its file.
+  RemoveOutcome remove(std::string_view name, Error* storeError = nullptr);
+
+  // <store>/<name>.brdf; empty without a user store.
+  std::string userFilePath(std::string_view name) const;
 
  private:
   mutable std::mutex mutex_;
+  // Serializes file writes with the map update, so the file on disk and the entry agree.
+  std::mutex storeMutex_;
+  std::string userDir_;  // set once by loadUserDir, before serving
   std::map<std::string, std::shared_ptr<const BrdfEntry>, std::less<>> entries_;
+  std::map<std::string, BrokenBrdf, std::less<>> broken_;
 };
 
 }  // namespace brdfa::server

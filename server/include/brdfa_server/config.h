@@ -11,7 +11,7 @@ struct ServerConfig {
   std::string host = "127.0.0.1";  // DESIGN.md section 6: loopback unless told otherwise
   int port = 8080;                 // 0 = let the kernel pick a free port
   std::string root;                // holds shaders/ and web/
-  std::string dataDir = "./data";  // user BRDFs and uploads (persistence is a later issue)
+  std::string dataDir = "./data";  // brdfs/ (saved user BRDFs), presets/, uploads
   std::string deviceName;          // substring of the Vulkan device name; empty = best device
   int threads = 64;                // HTTP workers; every stream client holds one
   int idleTimeoutSec = 30;         // a session with no watcher for this long stops rendering

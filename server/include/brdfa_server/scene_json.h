@@ -34,6 +34,10 @@ inline constexpr const char* kInlineBrdfName = "inline";
 // Scene.
 Result<Scene> sceneFromJson(const nlohmann::json& json, const SceneResolver& resolver);
 
+// One parameter value with the rules of `objects[i].params` (right type, finite, bools as
+// true/false/0/1); errors are InvalidArgument naming `field`.
+Result<Vec3> paramValueFromJson(const BrdfParam& param, const nlohmann::json& value, const std::string& field);
+
 // The full scene with every field present.
 nlohmann::json sceneToJson(const Scene& scene);
 

@@ -13,6 +13,7 @@
 #include "brdfa/renderer.h"
 #include "brdfa_server/brdf_library.h"
 #include "brdfa_server/config.h"
+#include "brdfa_server/jobs.h"
 #include "brdfa_server/scene_json.h"
 #include "brdfa_server/session_manager.h"
 
@@ -47,7 +48,11 @@ class RenderSlots {
 };
 
 struct Service {
-  // Opens the device, loads the built-in BRDFs and sets up the `default` session (its scene is
+  // <dataDir>/brdfs (saved user BRDFs) and <dataDir>/presets/<brdf> (saved parameter sets).
+  std::string userBrdfDir() const;
+  std::string presetDir(const std::string& brdf) const;
+
+  // Opens the device, loads the built-in and saved user BRDFs (parsed only) and sets up the `default` session (its scene is
   // applied lazily, on first use). `log` receives start-up warnings.
   static Result<std::unique_ptr<Service>> create(const ServerConfig& config, std::vector<std::string>& log);
 
@@ -62,6 +67,7 @@ struct Service {
   std::shared_ptr<Renderer> renderer;  // declared before sessions: views die before the device
   BrdfLibrary library;
   std::unique_ptr<SessionManager> sessions;
+  std::unique_ptr<JobManager> jobs;  // batch tests; its workers stop in beginShutdown
   RenderSlots renderSlots{kMaxConcurrentRenders, kMaxQueuedRenders};
   // Requests that hold an HTTP worker for long (streams, frame waits) are capped below the
   // worker count so that short requests (stats, scene edits, health) always find a worker.

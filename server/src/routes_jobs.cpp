@@ -1,0 +1,81 @@
+// Batch test jobs over REST: POST /api/jobs/validate queues, GET /api/jobs/{id} reports.
+#include <algorithm>
+#include <set>
+
+#include "brdfa_server/http_errors.h"
+#include "routes.h"
+
+namespace brdfa::server {
+
+void registerJobRoutes(httplib::Server& server, Service& service) {
+  server.Post("/api/jobs/validate", [&service](const httplib::Request& req, httplib::Response& res) {
+    auto body = readJsonBody(req, res);
+    if (!body) return;
+    if (!body->is_object())
+      return sendError(res, 400, "invalid_argument", "the body is {\"names\": [...]} or {\"all\": true}");
+    for (auto it = body->begin(); it != body->end(); ++it)
+      if (it.key() != "names" && it.key() != "all")
+        return sendError(res, 400, "invalid_argument", "unknown key '" + it.key() + "' (known: names, all)", it.key());
+    bool all = false;
+    if (auto it = body->find("all"); it != body->end()) {
+      if (!it->is_boolean()) return sendError(res, 400, "invalid_argument", "all: must be true or false", "all");
+      all = it->get<bool>();
+    }
+    auto namesIt = body->find("names");
+    if (all == (namesIt != body->end()))
+      return sendError(res, 400, "invalid_argument", "give exactly one of \"names\": [...] or \"all\": true");
+
+    std::vector<JobItem> items;
+    if (all) {
+      for (const auto& entry : service.library.list()) items.push_back(JobItem{entry->name, entry->definition, {}});
+      for (BrokenBrdf& b : service.library.listBroken())
+        items.push_back(JobItem{b.name, nullptr, std::move(b.error)});
+      std::sort(items.begin(), items.end(), [](const JobItem& a, const JobItem& b) { return a.name < b.name; });
+    } else {
+      if (!namesIt->is_array())
+        return sendError(res, 400, "invalid_argument", "names: must be an array of BRDF names", "names");
+      if (namesIt->empty()) return sendError(res, 400, "invalid_argument", "names: the list is empty", "names");
+      std::set<std::string> seen;
+      nlohmann::json unknown = nlohmann::json::array();
+      for (size_t i = 0; i < namesIt->size(); ++i) {
+        const nlohmann::json& n = (*namesIt)[i];
+        std::string field = "names[" + std::to_string(i) + "]";
+        if (!n.is_string()) return sendError(res, 400, "invalid_argument", field + ": must be a string", field);
+        std::string name = n.get<std::string>();
+        if (!seen.insert(name).second) continue;  // duplicates are tested once
+        if (auto entry = service.library.find(name))
+          items.push_back(JobItem{name, entry->definition, {}});
+        else if (auto broken = service.library.findBroken(name))
+          items.push_back(JobItem{name, nullptr, std::move(broken->error)});
+        else
+          unknown.push_back(name);
+      }
+      if (!unknown.empty()) {
+        std::string list;
+        for (const auto& u : unknown) list += (list.empty() ? "" : ", ") + u.get<std::string>();
+        return sendJson(res,
+                        {{"error", "not_found"},
+                         {"message", "no BRDF named " + list},
+                         {"field", "names"},
+                         {"names", unknown}},
+                        404);
+      }
+    }
+    if (items.empty()) return sendError(res, 400, "invalid_argument", "no BRDFs to test");
+    size_t total = items.size();
+    std::optional<std::string> id = service.jobs->submit(std::move(items));
+    if (!id)
+      return sendError(res, 429, "too_many_jobs",
+                       "at most " + std::to_string(kMaxJobs) + " jobs are kept and none has finished; try later");
+    sendJson(res, {{"id", *id}, {"total", total}}, 202);
+  });
+
+  server.Get("/api/jobs/([^/]+)", [&service](const httplib::Request& req, httplib::Response& res) {
+    std::string id = req.matches[1];
+    auto job = service.jobs->describe(id);
+    if (!job) return sendError(res, 404, "not_found", "no job '" + id + "'", "id");
+    sendJson(res, *job);
+  });
+}
+
+}  // namespace brdfa::server

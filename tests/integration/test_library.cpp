@@ -1,0 +1,512 @@
+// Saved user BRDFs (<data dir>/brdfs), presets, and batch test jobs, each against a real server
+// with a data folder of the test's own (so a restart can find what the last run saved).
+#include <signal.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <atomic>
+#include <filesystem>
+#include <fstream>
+#include <mutex>
+#include <random>
+#include <set>
+#include <sstream>
+#include <thread>
+
+#include "server_fixture.h"
+
+namespace brdfa::itest {
+namespace {
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+using Clock = std::chrono::steady_clock;
+
+// A fresh folder, removed at the end of the test.
+struct TempDir {
+  std::string path;
+  TempDir() {
+    char tmpl[] = "/tmp/brdfa-libtest-XXXXXX";
+    if (::mkdtemp(tmpl)) path = tmpl;
+  }
+  ~TempDir() {
+    std::error_code ec;
+    if (!path.empty()) fs::remove_all(path, ec);
+  }
+};
+
+std::string readFile(const fs::path& p) {
+  std::ifstream in(p, std::ios::binary);
+  std::ostringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+void writeFile(const fs::path& p, const std::string& text) {
+  fs::create_directories(p.parent_path());
+  std::ofstream(p, std::ios::binary) << text;
+}
+
+// A valid Lambertian BRDF that differs per `k` in its code (a new shader each time) and in
+// length (kilobytes of comment), so a torn write could not pass for another version.
+std::string lambertVersion(int k) {
+  std::string pad(2000 + (k % 7) * 3000, 'a' + static_cast<char>(k % 26));
+  return "analytic\n# version " + std::to_string(k) + " " + pad +
+         "\n::begin parameters\ncolor Kd 1 1 1\n::end parameters\n::begin shader\n"
+         "vec3 BRDF(vec3 L, vec3 V, vec3 N, vec3 X, vec3 Y)\n{\n    return Kd * " +
+         std::to_string(1.0 - k * 1e-6) + " / 3.14159265358979;\n}\n::end shader\n# end " + std::to_string(k) +
+         "\n";
+}
+
+// A server on `dataDir`; fails the test when it does not start.
+std::unique_ptr<ServerProcess> startOn(const std::string& dataDir, std::string* error = nullptr) {
+  auto s = std::make_unique<ServerProcess>();
+  std::string err = s->start({"--data-dir", dataDir, "--idle-timeout", "3"});
+  if (error) *error = err;
+  if (!err.empty()) ADD_FAILURE() << "server did not start: " << err;
+  return s;
+}
+
+json listNames(ServerProcess& s, json* list = nullptr) {
+  auto r = s.client()->Get("/api/brdfs");
+  json names = json::array();
+  if (!r || r->status != 200) return names;
+  json l = bodyJson(r);
+  for (const json& b : l) names.push_back(b["name"]);
+  if (list) *list = l;
+  return names;
+}
+
+bool contains(const json& arr, const std::string& s) {
+  for (const json& v : arr)
+    if (v == s) return true;
+  return false;
+}
+
+TEST(Library, SavedBrdfSurvivesRestartAndRenders) {
+  TempDir dir;
+  auto s = startOn(dir.path);
+  ASSERT_TRUE(s->running());
+  auto r = s->client()->Put("/api/brdfs/saved_one", kLambertWhite, "text/plain");
+  ASSERT_TRUE(r);
+  ASSERT_EQ(r->status, 201) << r->body;
+  EXPECT_EQ(readFile(fs::path(dir.path) / "brdfs" / "saved_one.brdf"), kLambertWhite);
+  EXPECT_EQ(s->terminate(), 0);
+
+  s = startOn(dir.path);
+  ASSERT_TRUE(s->running());
+  json list;
+  json names = listNames(*s, &list);
+  ASSERT_TRUE(contains(names, "saved_one")) << list.dump();
+  for (const json& b : list)
+    if (b["name"] == "saved_one") {
+      EXPECT_EQ(b["builtin"], false);
+      EXPECT_FALSE(b.contains("broken"));
+    }
+  json one = bodyJson(s->client()->Get("/api/brdfs/saved_one"));
+  EXPECT_EQ(one["source"], kLambertWhite);
+
+  json body = furnaceScene("saved_one", json::object(), 24, 16);
+  body["spp"] = 16;
+  body["format"] = "pfm";
+  r = s->client()->Post("/api/render", body.dump(), "application/json");
+  ASSERT_TRUE(r);
+  ASSERT_EQ(r->status, 200) << r->body;
+  Image img;
+  ASSERT_TRUE(decodeImage(r->body, img));
+  auto pixels = interiorPixels(img);
+  ASSERT_FALSE(pixels.empty());
+  for (auto [x, y] : pixels) ASSERT_NEAR(img.lum(x, y), 1.0f, 1e-3f) << x << "," << y;
+
+  // Deleting removes the file too: gone after another restart.
+  r = s->client()->Delete("/api/brdfs/saved_one");
+  ASSERT_TRUE(r);
+  EXPECT_EQ(r->status, 204);
+  EXPECT_FALSE(fs::exists(fs::path(dir.path) / "brdfs" / "saved_one.brdf"));
+  EXPECT_FALSE(contains(listNames(*s), "saved_one"));
+  EXPECT_EQ(s->terminate(), 0);
+  s = startOn(dir.path);
+  EXPECT_FALSE(contains(listNames(*s), "saved_one"));
+  EXPECT_EQ(s->terminate(), 0);
+}
+
+TEST(Library, BrokenSavedFileIsListedWithItsErrorAndStartupGoesOn) {
+  TempDir dir;
+  writeFile(fs::path(dir.path) / "brdfs" / "good.brdf", kLambertWhite);
+  writeFile(fs::path(dir.path) / "brdfs" / "bad.brdf", "analytic\n::begin parameters\nfloat a 0 1\n");
+  writeFile(fs::path(dir.path) / "brdfs" / ".tmp-good.brdf.Ab12Cd", "analytic\n::begin para");
+  auto s = startOn(dir.path);
+  ASSERT_TRUE(s->running());
+  json list;
+  json names = listNames(*s, &list);
+  EXPECT_TRUE(contains(names, "good"));
+  ASSERT_TRUE(contains(names, "bad")) << list.dump();
+  for (const json& b : list) {
+    EXPECT_EQ(b["name"].get<std::string>().find("tmp"), std::string::npos) << b.dump();
+    if (b["name"] == "bad") {
+      EXPECT_EQ(b["broken"], true);
+      EXPECT_TRUE(b["error"]["message"].is_string()) << b.dump();
+    }
+  }
+  EXPECT_FALSE(fs::exists(fs::path(dir.path) / "brdfs" / ".tmp-good.brdf.Ab12Cd")) << "stale temp file kept";
+  // A scene cannot use it; a PUT fixes it.
+  json body = furnaceScene("bad", json::object(), 16, 1);
+  body["spp"] = 1;
+  auto r = s->client()->Post("/api/render", body.dump(), "application/json");
+  ASSERT_TRUE(r);
+  EXPECT_EQ(r->status, 404) << r->body;
+  r = s->client()->Put("/api/brdfs/bad", kLambertWhite, "text/plain");
+  ASSERT_TRUE(r);
+  EXPECT_EQ(r->status, 200) << r->body;
+  json fixed = bodyJson(s->client()->Get("/api/brdfs/bad"));
+  EXPECT_FALSE(fixed.contains("broken")) << fixed.dump();
+  EXPECT_EQ(s->terminate(), 0);
+}
+
+TEST(Library, SigkillDuringSavesLeavesOnlyCompleteFiles) {
+  TempDir dir;
+  auto s = startOn(dir.path);
+  ASSERT_TRUE(s->running());
+  const std::vector<std::string> names = {"crash_a", "crash_b"};
+  std::mutex mutex;
+  std::set<std::string> sent;  // every version sent (whether or not its PUT finished)
+  std::atomic<int> okPuts{0};
+  std::atomic<bool> stop{false};
+  std::vector<std::thread> writers;
+  for (size_t w = 0; w < names.size(); ++w)
+    writers.emplace_back([&, w] {
+      auto cli = s->client(10);
+      for (int k = static_cast<int>(w) * 100000; !stop; ++k) {
+        std::string text = lambertVersion(k);
+        {
+          std::lock_guard lock(mutex);
+          sent.insert(text);
+        }
+        auto r = cli->Put("/api/brdfs/" + names[w], text, "text/plain");
+        if (!r) break;  // the server is gone
+        if (r->status == 200 || r->status == 201) ++okPuts;
+      }
+    });
+  std::mt19937 rng(std::random_device{}());
+  auto killAt = Clock::now() + std::chrono::milliseconds(500 + rng() % 700);
+  while ((Clock::now() < killAt || okPuts < 2) && Clock::now() < killAt + std::chrono::seconds(30))
+    std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  ASSERT_GE(okPuts.load(), 2);
+  ::kill(s->pid(), SIGKILL);
+  stop = true;
+  for (auto& t : writers) t.join();
+  std::fprintf(stderr, "SIGKILL after %d completed saves (%zu versions sent)\n", okPuts.load(), sent.size());
+  s.reset();  // reaps the killed process
+
+  size_t files = 0;
+  for (const auto& e : fs::directory_iterator(fs::path(dir.path) / "brdfs")) {
+    std::string name = e.path().filename().string();
+    if (e.path().extension() != ".brdf") continue;
+    ++files;
+    std::string text = readFile(e.path());
+    EXPECT_FALSE(text.empty()) << name;
+    EXPECT_TRUE(sent.count(text)) << name << " is not one of the versions written (" << text.size() << " bytes)";
+  }
+  EXPECT_GE(files, 1u);
+
+  s = startOn(dir.path);
+  ASSERT_TRUE(s->running());
+  json list;
+  json got = listNames(*s, &list);
+  for (const json& b : list) {
+    EXPECT_FALSE(b.contains("broken")) << b.dump();
+    std::string n = b["name"];
+    EXPECT_TRUE(b["builtin"] == true || n == "crash_a" || n == "crash_b") << "unexpected entry " << b.dump();
+  }
+  for (const auto& e : fs::directory_iterator(fs::path(dir.path) / "brdfs"))
+    EXPECT_EQ(e.path().extension(), ".brdf") << "left over after restart: " << e.path();
+  EXPECT_EQ(s->terminate(), 0);
+}
+
+TEST(Library, StartupTimeDoesNotGrowWithSavedBrdfs) {
+  TempDir empty, full;
+  for (int i = 0; i < 400; ++i)
+    writeFile(fs::path(full.path) / "brdfs" / ("user_" + std::to_string(i) + ".brdf"), lambertVersion(i));
+  // Best of two for each, alternating, to keep one slow start from deciding.
+  auto timeStart = [](const std::string& dir, size_t* userCount) {
+    auto t0 = Clock::now();
+    auto s = startOn(dir);
+    double ms = std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
+    if (userCount) {
+      json list;
+      listNames(*s, &list);
+      *userCount = 0;
+      for (const json& b : list) *userCount += b["builtin"] == false && !b.contains("broken");
+    }
+    EXPECT_EQ(s->terminate(), 0);
+    return ms;
+  };
+  double emptyMs = 1e18, fullMs = 1e18;
+  size_t users = 0;
+  for (int round = 0; round < 2; ++round) {
+    emptyMs = std::min(emptyMs, timeStart(empty.path, nullptr));
+    fullMs = std::min(fullMs, timeStart(full.path, &users));
+  }
+  EXPECT_EQ(users, 400u);
+  RecordProperty("startup_ms_empty", std::to_string(emptyMs));
+  RecordProperty("startup_ms_400", std::to_string(fullMs));
+  std::fprintf(stderr, "start-up: %.0f ms empty, %.0f ms with 400 saved BRDFs\n", emptyMs, fullMs);
+  EXPECT_LE(fullMs, emptyMs * 1.2 + 150.0) << "empty " << emptyMs << " ms, 400 BRDFs " << fullMs << " ms";
+}
+
+TEST(Library, SigtermDuringABatchJobExitsCleanly) {
+  TempDir dir;
+  auto s = startOn(dir.path);
+  ASSERT_TRUE(s->running());
+  for (int i = 0; i < 3; ++i) {
+    auto r = s->client()->Post("/api/jobs/validate", R"({"all": true})", "application/json");
+    ASSERT_TRUE(r);
+    ASSERT_EQ(r->status, 202) << r->body;
+  }
+  auto t0 = Clock::now();
+  EXPECT_EQ(s->terminate(std::chrono::seconds(20)), 0) << s->logTail();
+  double ms = std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
+  EXPECT_LT(ms, 10000.0);
+}
+
+// The rest share one server.
+class LibraryApi : public ServerTest {};
+
+TEST_F(LibraryApi, BuiltinsAreReadOnlyAndNamesAreChecked) {
+  auto r = put("/api/brdfs/ggx", kLambertWhite, "text/plain");
+  ASSERT_TRUE(r);
+  EXPECT_EQ(r->status, 409) << r->body;
+  r = del("/api/brdfs/ggx");
+  ASSERT_TRUE(r);
+  EXPECT_EQ(r->status, 409) << r->body;
+  for (const std::string& bad :
+       std::vector<std::string>{"has%20space", "dot.name", std::string(65, 'x'), "inline", "%C3%A9t%C3%A9"}) {
+    r = put("/api/brdfs/" + bad, kLambertWhite, "text/plain");
+    ASSERT_TRUE(r);
+    EXPECT_EQ(r->status, 400) << bad << ": " << r->body;
+    r = del("/api/brdfs/" + bad);
+    ASSERT_TRUE(r);
+    EXPECT_EQ(r->status, 400) << bad << ": " << r->body;
+  }
+  r = put("/api/brdfs/" + std::string(64, 'x'), kLambertWhite, "text/plain");
+  ASSERT_TRUE(r);
+  EXPECT_EQ(r->status, 201) << r->body;
+  r = del("/api/brdfs/" + std::string(64, 'x'));
+  ASSERT_TRUE(r);
+  EXPECT_EQ(r->status, 204);
+
+  r = put("/api/brdfs/to_delete", kLambertWhite, "text/plain");
+  ASSERT_TRUE(r);
+  ASSERT_EQ(r->status, 201) << r->body;
+  EXPECT_TRUE(contains(listNames(*server_), "to_delete"));
+  r = del("/api/brdfs/to_delete");
+  ASSERT_TRUE(r);
+  EXPECT_EQ(r->status, 204);
+  EXPECT_FALSE(contains(listNames(*server_), "to_delete"));
+  r = del("/api/brdfs/to_delete");
+  ASSERT_TRUE(r);
+  EXPECT_EQ(r->status, 404);
+  r = get("/api/brdfs/to_delete");
+  ASSERT_TRUE(r);
+  EXPECT_EQ(r->status, 404);
+}
+
+TEST_F(LibraryApi, PresetsRoundTrip) {
+  // On a built-in: ggx's parameters.
+  json ggx = bodyJson(get("/api/brdfs/ggx"));
+  json values = json::object();
+  for (const json& p : ggx["params"]) {
+    if (p["type"] == "float") values[p["name"].get<std::string>()] = p["max"];
+    if (p["type"] == "color") values[p["name"].get<std::string>()] = json({0.25, 0.5, 0.75});
+    if (p["type"] == "bool") values[p["name"].get<std::string>()] = true;
+  }
+  ASSERT_FALSE(values.empty()) << ggx.dump();
+  EXPECT_EQ(bodyJson(get("/api/brdfs/ggx/presets")), json::array());
+  auto r = put("/api/brdfs/ggx/presets/shiny", values.dump());
+  ASSERT_TRUE(r);
+  EXPECT_EQ(r->status, 201) << r->body;
+  r = put("/api/brdfs/ggx/presets/shiny", values.dump());
+  ASSERT_TRUE(r);
+  EXPECT_EQ(r->status, 200) << r->body;
+  r = put("/api/brdfs/ggx/presets/empty", "{}");
+  ASSERT_TRUE(r);
+  EXPECT_EQ(r->status, 201) << r->body;
+  EXPECT_EQ(bodyJson(get("/api/brdfs/ggx/presets")), json({"empty", "shiny"}));
+  r = get("/api/brdfs/ggx/presets/shiny");
+  ASSERT_TRUE(r);
+  ASSERT_EQ(r->status, 200);
+  json back = bodyJson(r);
+  ASSERT_EQ(back.size(), values.size()) << back.dump();
+  for (auto it = values.begin(); it != values.end(); ++it) {
+    if (it->is_array())
+      for (int c = 0; c < 3; ++c) EXPECT_NEAR(back[it.key()][c].get<double>(), (*it)[c].get<double>(), 1e-6);
+    else if (it->is_number())
+      EXPECT_NEAR(back[it.key()].get<double>(), it->get<double>(), 1e-6);
+    else
+      EXPECT_EQ(back[it.key()], *it);
+  }
+
+  // Bad values: unknown name, wrong type, non-finite, not an object, bad names.
+  std::string floatName, colorName;
+  for (const json& p : ggx["params"]) {
+    if (p["type"] == "float" && floatName.empty()) floatName = p["name"];
+    if (p["type"] == "color" && colorName.empty()) colorName = p["name"];
+  }
+  std::vector<std::string> bad = {R"({"no_such_param": 1})", "[1, 2]", "{not json", R"({"a": 1e999})"};
+  if (!floatName.empty()) {
+    bad.push_back(json{{floatName, "0.5"}}.dump());
+    bad.push_back(json{{floatName, nullptr}}.dump());
+    bad.push_back("{\"" + floatName + "\": NaN}");
+    bad.push_back("{\"" + floatName + "\": 1e300}");
+  }
+  if (!colorName.empty()) {
+    bad.push_back(json{{colorName, {1, 2}}}.dump());
+    bad.push_back(json{{colorName, 0.5}}.dump());
+  }
+  for (const std::string& b : bad) {
+    r = put("/api/brdfs/ggx/presets/broken", b);
+    ASSERT_TRUE(r);
+    EXPECT_EQ(r->status, 400) << b << ": " << r->body;
+  }
+  r = get("/api/brdfs/ggx/presets/broken");
+  ASSERT_TRUE(r);
+  EXPECT_EQ(r->status, 404);
+  r = put("/api/brdfs/ggx/presets/bad.name", "{}");
+  ASSERT_TRUE(r);
+  EXPECT_EQ(r->status, 400);
+  r = put("/api/brdfs/no_such_brdf/presets/x", "{}");
+  ASSERT_TRUE(r);
+  EXPECT_EQ(r->status, 404);
+
+  // On a user BRDF, bools as 0/1 too; delete.
+  r = put("/api/brdfs/preset_user", kLambertWhite, "text/plain");
+  ASSERT_TRUE(r && (r->status == 201 || r->status == 200));
+  r = put("/api/brdfs/preset_user/presets/red", R"({"Kd": [1, 0, 0]})");
+  ASSERT_TRUE(r);
+  EXPECT_EQ(r->status, 201) << r->body;
+  EXPECT_EQ(bodyJson(get("/api/brdfs/preset_user/presets/red")), json({{"Kd", {1, 0, 0}}}));
+  r = del("/api/brdfs/preset_user/presets/red");
+  ASSERT_TRUE(r);
+  EXPECT_EQ(r->status, 204);
+  r = del("/api/brdfs/preset_user/presets/red");
+  ASSERT_TRUE(r);
+  EXPECT_EQ(r->status, 404);
+  EXPECT_EQ(bodyJson(get("/api/brdfs/preset_user/presets")), json::array());
+  r = del("/api/brdfs/ggx/presets/shiny");
+  ASSERT_TRUE(r);
+  EXPECT_EQ(r->status, 204);
+  EXPECT_EQ(bodyJson(get("/api/brdfs/ggx/presets")), json({"empty"}));
+}
+
+TEST_F(LibraryApi, BatchJobRequestsAreChecked) {
+  auto r = post("/api/jobs/validate", R"({"names": []})");
+  ASSERT_TRUE(r);
+  EXPECT_EQ(r->status, 400) << r->body;
+  r = post("/api/jobs/validate", R"({"names": ["ggx", "nope_1", "nope_2"]})");
+  ASSERT_TRUE(r);
+  EXPECT_EQ(r->status, 404) << r->body;
+  EXPECT_EQ(bodyJson(r)["names"], json({"nope_1", "nope_2"})) << r->body;
+  EXPECT_NE(r->body.find("nope_1"), std::string::npos);
+  for (const char* b : {"{}", R"({"all": false})", R"({"names": "ggx"})", R"({"names": [1]})", "[]", "{x"}) {
+    r = post("/api/jobs/validate", b);
+    ASSERT_TRUE(r);
+    EXPECT_EQ(r->status, 400) << b << ": " << r->body;
+  }
+  r = get("/api/jobs/no-such-job");
+  ASSERT_TRUE(r);
+  EXPECT_EQ(r->status, 404);
+
+  // A named job with a BRDF that compiles and one that does not.
+  r = put("/api/brdfs/job_good", kLambertWhite, "text/plain");
+  ASSERT_TRUE(r && (r->status == 201 || r->status == 200));
+  r = post("/api/jobs/validate", R"({"names": ["job_good", "lambert"]})");
+  ASSERT_TRUE(r);
+  ASSERT_EQ(r->status, 202) << r->body;
+  json accepted = bodyJson(r);
+  EXPECT_EQ(accepted["total"], 2);
+  json job;
+  for (auto deadline = Clock::now() + std::chrono::seconds(60); Clock::now() < deadline;) {
+    job = bodyJson(get("/api/jobs/" + accepted["id"].get<std::string>()));
+    if (job["state"] == "done") break;
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  }
+  ASSERT_EQ(job["state"], "done") << job.dump();
+  ASSERT_EQ(job["results"].size(), 2u);
+  for (const json& res : job["results"]) {
+    EXPECT_EQ(res["errors"], 0) << res.dump();
+    EXPECT_TRUE(res["compile_ms"].is_number());
+    EXPECT_TRUE(res["log"].is_array());
+    EXPECT_TRUE(res["checks"].is_object());
+  }
+}
+
+TEST_F(LibraryApi, BatchJobOverAllRunsWhileTheStreamKeepsDelivering) {
+  // A scene that never converges, so the stream has new frames all along.
+  auto r = put("/api/sessions/default/scene", furnaceScene("lambert", json::object(), 32, 1 << 20, 1).dump());
+  ASSERT_TRUE(r && r->status == 200) << (r ? r->body : "");
+  size_t brdfCount = bodyJson(get("/api/brdfs")).size();
+
+  std::atomic<int> parts{0};
+  std::atomic<bool> stopStream{false};
+  std::thread streamer([&] {
+    auto cli = server_->client(20);
+    std::string buf;
+    cli->Get("/api/sessions/default/stream", httplib::Headers{}, [&](const char* data, size_t len) {
+      buf.append(data, len);
+      for (size_t p; (p = buf.find("--frame\r\n")) != std::string::npos;) {
+        ++parts;
+        buf.erase(0, p + 9);
+      }
+      if (buf.size() > 8) buf.erase(0, buf.size() - 8);  // a boundary may span two chunks
+      return !stopStream.load();
+    });
+  });
+  // The stream is running before the job starts.
+  for (auto deadline = Clock::now() + std::chrono::seconds(30); parts < 1 && Clock::now() < deadline;)
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  ASSERT_GE(parts.load(), 1);
+
+  r = post("/api/jobs/validate", R"({"all": true})");
+  ASSERT_TRUE(r);
+  ASSERT_EQ(r->status, 202) << r->body;
+  int partsAtSubmit = parts;
+  json accepted = bodyJson(r);
+  EXPECT_EQ(accepted["total"], brdfCount);
+  std::string id = accepted["id"];
+  json job;
+  int partsDuringJob = 0;
+  double lastProgress = 0;
+  for (auto deadline = Clock::now() + std::chrono::seconds(120); Clock::now() < deadline;) {
+    job = bodyJson(get("/api/jobs/" + id));
+    ASSERT_TRUE(job.is_object());
+    double progress = job["progress"];
+    EXPECT_GE(progress, lastProgress);
+    EXPECT_LE(progress, 1.0);
+    lastProgress = progress;
+    partsDuringJob = parts - partsAtSubmit;
+    if (job["state"] == "done") break;
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  }
+  stopStream = true;
+  streamer.join();
+  ASSERT_EQ(job["state"], "done") << job.dump();
+  EXPECT_EQ(job["progress"], 1.0);
+  ASSERT_EQ(job["results"].size(), brdfCount);
+  std::set<std::string> names;
+  for (const json& res : job["results"]) {
+    names.insert(res["name"].get<std::string>());
+    for (const char* key : {"name", "ok", "errors", "log", "compile_ms", "checks"})
+      EXPECT_TRUE(res.contains(key)) << key << " missing: " << res.dump();
+    // Built-ins compile; the check either reports numbers or says why it could not run.
+    const json& checks = res["checks"];
+    EXPECT_TRUE(checks.contains("error") || (checks.contains("nan") && checks.contains("max_albedo") &&
+                                             checks.contains("max_reciprocity_error")))
+        << res.dump();
+  }
+  EXPECT_EQ(names.size(), brdfCount);
+  std::fprintf(stderr, "batch over %zu BRDFs: %d stream parts arrived meanwhile\n", brdfCount, partsDuringJob);
+  EXPECT_GE(partsDuringJob, 2) << "the stream stalled while the job ran";
+}
+
+}  // namespace
+}  // namespace brdfa::itest
