@@ -3,7 +3,9 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstdlib>
 #include <cstring>
+#include <filesystem>
 
 #include "brdf_features.h"
 #include "environment_maps.h"
@@ -40,6 +42,12 @@ Result<std::shared_ptr<RendererImpl>> RendererImpl::create(const RendererOptions
 }
 
 Result<void> RendererImpl::init(const RendererOptions& options) {
+  diskCache_ = std::make_unique<SpirvDiskCache>(options.cacheDir, options.loadCache);
+  if (!options.driverCacheDir.empty()) {
+    std::error_code ec;
+    std::filesystem::create_directories(options.driverCacheDir, ec);
+    ::setenv("MESA_SHADER_CACHE_DIR", options.driverCacheDir.c_str(), /*overwrite=*/0);
+  }
   auto sources = ShaderSources::load(options.shaderDir);
   if (!sources) return sources.takeError();
   sources_ = std::move(sources.value());
@@ -296,10 +304,19 @@ Result<std::shared_ptr<const SpirvBinary>> RendererImpl::spirv(ShaderStage stage
       return it->second;
     }
   }
-  ++glslCompiles_;
-  auto compiled = compileGlsl(stage, source);
-  if (!compiled) return compiled.takeError();
-  auto shared = std::make_shared<const SpirvBinary>(std::move(compiled.value()));
+  std::shared_ptr<const SpirvBinary> shared;
+  if (auto words = diskCache_->load(key, source.size())) {
+    ++spirvDiskHits_;
+    auto binary = std::make_shared<SpirvBinary>();
+    binary->words = std::move(*words);
+    shared = binary;
+  } else {
+    ++glslCompiles_;
+    auto compiled = compileGlsl(stage, source);
+    if (!compiled) return compiled.takeError();
+    diskCache_->store(key, source.size(), compiled->words);
+    shared = std::make_shared<const SpirvBinary>(std::move(compiled.value()));
+  }
   std::lock_guard<std::mutex> lock(spirvMutex_);
   if (spirvCache_.emplace(key, shared).second) spirvOrder_.push_back(key);
   evictOldest(spirvCache_, spirvOrder_);
@@ -452,7 +469,7 @@ Result<std::shared_ptr<const GpuMesh>> RendererImpl::mesh(const std::string& nam
 }
 
 RendererCounters RendererImpl::counters() const {
-  return RendererCounters{glslCompiles_.load(), spirvCacheHits_.load(), pipelinesCreated_.load()};
+  return RendererCounters{glslCompiles_.load(), spirvCacheHits_.load(), spirvDiskHits_.load(), pipelinesCreated_.load()};
 }
 
 std::vector<std::string> RendererImpl::environmentNames() const { return builtinEnvironmentNames(); }

@@ -14,6 +14,7 @@
 #include "glsl_compiler.h"
 #include "gpu_assets.h"
 #include "shader_sources.h"
+#include "spirv_disk_cache.h"
 #include "vk_context.h"
 
 namespace brdfa {
@@ -95,7 +96,8 @@ class RendererImpl final : public Renderer, public std::enable_shared_from_this<
   std::unordered_map<uint64_t, std::shared_ptr<const ShadeKernel>> kernelCache_;
   std::deque<uint64_t> kernelOrder_;
 
-  std::atomic<uint64_t> glslCompiles_{0}, spirvCacheHits_{0}, pipelinesCreated_{0};
+  std::atomic<uint64_t> glslCompiles_{0}, spirvCacheHits_{0}, spirvDiskHits_{0}, pipelinesCreated_{0};
+  std::unique_ptr<SpirvDiskCache> diskCache_;
 
   std::mutex assetMutex_;
   std::map<std::string, std::shared_ptr<const GpuEnvironment>> environments_;

@@ -42,6 +42,8 @@ std::string usageText(const char* program) {
          "  --device NAME     pick the Vulkan device whose name contains NAME\n"
          "  --threads N       HTTP worker threads (default 64; each stream client holds one)\n"
          "  --idle-timeout S  seconds a session keeps rendering without a watcher (default 30)\n"
+         "  --no-cache-load   ignore cached SPIR-V (<data-dir>/cache/spirv), compile afresh and\n"
+         "                    refresh the cache\n"
          "  --help            show this text\n"
          "On start prints one line `listening on http://HOST:PORT` to stdout.\n";
 }
@@ -58,6 +60,10 @@ ParseOutcome parse_command_line(int argc, const char* const* argv) {
       out.exitCode = 0;
       out.message = usageText(argv[0]);
       return out;
+    }
+    if (arg == "--no-cache-load") {
+      config.loadCache = false;
+      continue;
     }
     // Accept both `--flag value` and `--flag=value`.
     std::string_view name = arg;

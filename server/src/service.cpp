@@ -66,6 +66,10 @@ Result<std::unique_ptr<Service>> Service::create(const ServerConfig& config, std
   RendererOptions options;
   options.deviceName = config.deviceName;
   options.shaderDir = (std::filesystem::path(config.root) / "shaders").string();
+  // Both caches live in the data dir: SPIR-V by content hash, and Mesa's own shader cache.
+  options.cacheDir = (std::filesystem::path(config.dataDir) / "cache" / "spirv").string();
+  options.driverCacheDir = (std::filesystem::path(config.dataDir) / "cache" / "mesa").string();
+  options.loadCache = config.loadCache;
   Result<std::shared_ptr<Renderer>> renderer = Renderer::create(options);
   if (!renderer) return renderer.takeError();
   service->renderer = std::move(renderer.value());

@@ -23,6 +23,12 @@ struct RendererOptions {
   std::string shaderDir;   // directory holding shaders/lib and shaders/kernels
   bool validation = false; // enable VK_LAYER_KHRONOS_validation when present
   ResolveMode resolve = ResolveMode::Auto;
+  // SPIR-V cache on disk (empty: memory only). loadCache false only writes it (--no-cache-load).
+  std::string cacheDir;
+  bool loadCache = true;
+  // Points Mesa's shader disk cache here (sets MESA_SHADER_CACHE_DIR for this process unless it
+  // is already set) before the device opens; empty leaves the driver's default.
+  std::string driverCacheDir;
 };
 
 struct DeviceInfo {
@@ -90,7 +96,8 @@ class RenderView {
 // change did (or did not) compile anything.
 struct RendererCounters {
   uint64_t glslCompiles = 0;     // GLSL -> SPIR-V runs (SPIR-V cache misses)
-  uint64_t spirvCacheHits = 0;
+  uint64_t spirvCacheHits = 0;    // from memory
+  uint64_t spirvDiskHits = 0;     // from the disk cache
   uint64_t pipelinesCreated = 0; // shading pipelines built (each costs a driver JIT)
 };
 
