@@ -7,7 +7,9 @@
 #include "program_assembler.h"
 
 #include <algorithm>
+#include <cctype>
 #include <cstring>
+#include <unordered_set>
 
 namespace brdfa {
 
@@ -58,6 +60,117 @@ void writeFloat(std::vector<uint8_t>& bytes, uint32_t offset, float v) {
 
 void writeUint(std::vector<uint8_t>& bytes, uint32_t offset, uint32_t v) {
   std::memcpy(bytes.data() + offset, &v, sizeof v);
+}
+
+// Names of GLSL built-in functions (GLSL 4.50 plus the legacy texture names and noise). The
+// Explorer compiled its files as old desktop GLSL, where a user function with a built-in's name
+// hid the built-in (its shipped files define their own `reflect` and `smoothstep`); glslang
+// under `#version 450` rejects that. Renaming such user functions with a macro keeps the user
+// text unchanged and gives the old meaning: every use of the name in the user's sections is
+// the user's function. Renaming a name that is not a built-in would also be harmless.
+const std::unordered_set<std::string>& builtinFunctionNames() {
+  static const std::unordered_set<std::string> names = {
+      // angle and trigonometry, exponential, common
+      "radians", "degrees", "sin", "cos", "tan", "asin", "acos", "atan", "sinh", "cosh", "tanh",
+      "asinh", "acosh", "atanh", "pow", "exp", "log", "exp2", "log2", "sqrt", "inversesqrt",
+      "abs", "sign", "floor", "trunc", "round", "roundEven", "ceil", "fract", "mod", "modf",
+      "min", "max", "clamp", "mix", "step", "smoothstep", "isnan", "isinf", "floatBitsToInt",
+      "floatBitsToUint", "intBitsToFloat", "uintBitsToFloat", "fma", "frexp", "ldexp",
+      // packing
+      "packUnorm2x16", "packSnorm2x16", "packUnorm4x8", "packSnorm4x8", "unpackUnorm2x16",
+      "unpackSnorm2x16", "unpackUnorm4x8", "unpackSnorm4x8", "packHalf2x16", "unpackHalf2x16",
+      "packDouble2x32", "unpackDouble2x32",
+      // geometric, matrix, vector relational
+      "length", "distance", "dot", "cross", "normalize", "faceforward", "reflect", "refract",
+      "ftransform", "matrixCompMult", "outerProduct", "transpose", "determinant", "inverse",
+      "lessThan", "lessThanEqual", "greaterThan", "greaterThanEqual", "equal", "notEqual", "any",
+      "all", "not",
+      // integer
+      "uaddCarry", "usubBorrow", "umulExtended", "imulExtended", "bitfieldExtract",
+      "bitfieldInsert", "bitfieldReverse", "bitCount", "findLSB", "findMSB",
+      // texture
+      "textureSize", "textureQueryLod", "textureQueryLevels", "textureSamples", "texture",
+      "textureProj", "textureLod", "textureOffset", "texelFetch", "texelFetchOffset",
+      "textureProjOffset", "textureLodOffset", "textureProjLod", "textureProjLodOffset",
+      "textureGrad", "textureGradOffset", "textureProjGrad", "textureProjGradOffset",
+      "textureGather", "textureGatherOffset", "textureGatherOffsets", "texture1D", "texture1DProj",
+      "texture1DLod", "texture1DProjLod", "texture2D", "texture2DProj", "texture2DLod",
+      "texture2DProjLod", "texture3D", "texture3DProj", "texture3DLod", "texture3DProjLod",
+      "textureCube", "textureCubeLod", "shadow1D", "shadow2D", "shadow1DProj", "shadow2DProj",
+      "shadow1DLod", "shadow2DLod", "shadow1DProjLod", "shadow2DProjLod",
+      // derivatives, interpolation, noise
+      "dFdx", "dFdy", "fwidth", "dFdxFine", "dFdyFine", "fwidthFine", "dFdxCoarse", "dFdyCoarse",
+      "fwidthCoarse", "interpolateAtCentroid", "interpolateAtSample", "interpolateAtOffset",
+      "noise1", "noise2", "noise3", "noise4",
+      // atomics, images, synchronisation
+      "atomicCounterIncrement", "atomicCounterDecrement", "atomicCounter", "atomicAdd",
+      "atomicMin", "atomicMax", "atomicAnd", "atomicOr", "atomicXor", "atomicExchange",
+      "atomicCompSwap", "imageSize", "imageSamples", "imageLoad", "imageStore", "imageAtomicAdd",
+      "imageAtomicMin", "imageAtomicMax", "imageAtomicAnd", "imageAtomicOr", "imageAtomicXor",
+      "imageAtomicExchange", "imageAtomicCompSwap", "barrier", "memoryBarrier",
+      "memoryBarrierAtomicCounter", "memoryBarrierBuffer", "memoryBarrierShared",
+      "memoryBarrierImage", "groupMemoryBarrier", "EmitVertex", "EndPrimitive",
+      "EmitStreamVertex", "EndStreamPrimitive",
+  };
+  return names;
+}
+
+bool isIdentStart(char c) { return std::isalpha(static_cast<unsigned char>(c)) || c == '_'; }
+bool isIdentChar(char c) { return std::isalnum(static_cast<unsigned char>(c)) || c == '_'; }
+
+// Appends to `out` the names of functions that `text` declares or defines at file scope
+// (`<type> <name> (` outside any braces) and that are GLSL built-in function names.
+// Comments and preprocessor lines are skipped; a call such as `x = reflect(a, b);` is not a
+// declaration because the token before the name is not an identifier (a type).
+void collectBuiltinOverrides(const std::string& text, std::vector<std::string>& out) {
+  const auto& builtins = builtinFunctionNames();
+  int braceDepth = 0, parenDepth = 0;
+  bool prevWasIdent = false;  // the previous token was an identifier (a type name, say)
+  size_t i = 0;
+  const size_t n = text.size();
+  bool lineStart = true;
+  while (i < n) {
+    char c = text[i];
+    if (c == '\n') { lineStart = true; ++i; continue; }
+    if (c == ' ' || c == '\t' || c == '\r' || c == '\f' || c == '\v') { ++i; continue; }
+    if (c == '/' && i + 1 < n && text[i + 1] == '/') {
+      while (i < n && text[i] != '\n') ++i;
+      continue;
+    }
+    if (c == '/' && i + 1 < n && text[i + 1] == '*') {
+      size_t end = text.find("*/", i + 2);
+      i = end == std::string::npos ? n : end + 2;
+      continue;
+    }
+    if (c == '#' && lineStart) {  // preprocessor line (with backslash continuations)
+      while (i < n && text[i] != '\n') {
+        if (text[i] == '\\' && i + 1 < n && text[i + 1] == '\n') ++i;
+        ++i;
+      }
+      prevWasIdent = false;
+      continue;
+    }
+    lineStart = false;
+    if (isIdentStart(c)) {
+      size_t start = i;
+      while (i < n && isIdentChar(text[i])) ++i;
+      std::string ident = text.substr(start, i - start);
+      size_t j = i;
+      while (j < n && (text[j] == ' ' || text[j] == '\t' || text[j] == '\r' || text[j] == '\n')) ++j;
+      if (braceDepth == 0 && parenDepth == 0 && prevWasIdent && j < n && text[j] == '(' &&
+          builtins.count(ident) && std::find(out.begin(), out.end(), ident) == out.end())
+        out.push_back(ident);
+      prevWasIdent = true;
+      continue;
+    }
+    if (c == '{') ++braceDepth;
+    else if (c == '}') braceDepth = std::max(0, braceDepth - 1);
+    else if (c == '(') ++parenDepth;
+    else if (c == ')') parenDepth = std::max(0, parenDepth - 1);
+    // `]` closes an array return type (`float[2] f(`); keep it acting like a type name.
+    prevWasIdent = (c == ']');
+    ++i;
+  }
 }
 
 }  // namespace
@@ -121,9 +234,18 @@ AssembledProgram assembleProgram(const ProgramSpec& spec) {
   for (const std::string& chunk : spec.commonChunks) appendLine(s, chunk);
 
   if (spec.brdf) {
+    // User functions named like GLSL built-ins (see builtinFunctionNames) are renamed for the
+    // user's sections only: the #defines sit in the generated region before the first user
+    // `#line`, so user line numbers are untouched, and are #undef'd before the integrator.
+    std::vector<std::string> renamed;
+    collectBuiltinOverrides(spec.brdf->shader, renamed);
+    if (spec.brdf->hasSampler()) collectBuiltinOverrides(spec.brdf->sampleShader, renamed);
+    for (const std::string& name : renamed) s += "#define " + name + " brdfa_user_" + name + "\n";
+
     appendUserText(s, spec.brdf->shader, spec.brdf->shaderFirstLine);
     if (spec.brdf->hasSampler())
       appendUserText(s, spec.brdf->sampleShader, spec.brdf->sampleFirstLine);
+    for (const std::string& name : renamed) s += "#undef " + name + "\n";
     appendGeneratedLineDirective(s);
   }
   appendLine(s, spec.integrator);

@@ -1,4 +1,5 @@
-// Program assembly: std140 parameter block, packing, section order and #line directives.
+// Program assembly: std140 parameter block, packing, section order, #line directives and the
+// renaming of user functions that shadow GLSL built-ins.
 #include <gtest/gtest.h>
 
 #include <cstring>
@@ -6,6 +7,7 @@
 #include <string>
 #include <vector>
 
+#include "glsl_compiler.h"
 #include "program_assembler.h"
 
 namespace brdfa {
@@ -207,6 +209,111 @@ TEST_F(Assembly, HashChangesWithSource) {
   brdf.shader += "\n// edit";
   EXPECT_NE(assembleProgram(spec).hash, h1);
   EXPECT_EQ(assembleProgram(spec).hash, assembleProgram(spec).hash);
+}
+
+// Old desktop GLSL (what the Explorer compiled its files as) let a user function hide a
+// built-in of the same name; glslang under #version 450 rejects the redefinition. The assembler
+// renames such functions with a macro that covers only the user's sections.
+TEST_F(Assembly, UserFunctionsNamedLikeBuiltinsAreRenamedForUserTextOnly) {
+  brdf.shader =
+      "// a comment mentioning float mix(float a) is not a declaration\n"
+      "vec3 reflect(vec3 d, vec3 n) { return 2.0 * dot(d, n) * n - d; }\n"
+      "float step (float e, float x);\n"
+      "float step (float e, float x) { return x < e ? 0.0 : 1.0; }\n"
+      "vec3 BRDF(vec3 L, vec3 V, vec3 N, vec3 X, vec3 Y) {\n"
+      "  float t = max(0.0, dot(reflect(L, N), V));\n"  // calls are not declarations
+      "  return vec3(step(0.5, t) * roughness);\n"
+      "}\n";
+  brdf.sampleShader = "vec3 sampleBRDF(vec2 u, vec3 V, vec3 N, vec3 X, vec3 Y, out vec3 L, "
+                      "out float pdf) { L = reflect(V, N); pdf = 1.0; return BRDF(L, V, N, X, Y); }\n";
+  brdf.sampleFirstLine = 30;
+  AssembledProgram p = assembleProgram(spec);
+  const std::string& src = p.source;
+
+  const size_t defReflect = src.find("#define reflect brdfa_user_reflect\n");
+  const size_t defStep = src.find("#define step brdfa_user_step\n");
+  const size_t user = src.find("#line 7 1\n// a comment");
+  const size_t sample = src.find("#line 30 1\nvec3 sampleBRDF");
+  const size_t undefReflect = src.find("#undef reflect\n");
+  const size_t undefStep = src.find("#undef step\n");
+  const size_t integrator = src.find("// integrator");
+  ASSERT_NE(defReflect, std::string::npos) << src;
+  ASSERT_NE(defStep, std::string::npos) << src;
+  ASSERT_NE(user, std::string::npos) << src;
+  ASSERT_NE(sample, std::string::npos) << src;
+  ASSERT_NE(undefReflect, std::string::npos) << src;
+  ASSERT_NE(undefStep, std::string::npos) << src;
+  // After the common code, before the first user line; undone after the last user section.
+  EXPECT_LT(src.find("// chunk B"), defReflect);
+  EXPECT_LT(defReflect, user);
+  EXPECT_LT(defStep, user);
+  EXPECT_LT(sample, undefReflect);
+  EXPECT_LT(undefStep, integrator);
+  EXPECT_EQ(src.find("#define mix"), std::string::npos) << "names in comments are ignored";
+  EXPECT_EQ(src.find("#define max"), std::string::npos) << "calls are not declarations";
+  EXPECT_EQ(src.find("#define dot"), std::string::npos);
+  // The user's text is emitted unchanged.
+  EXPECT_NE(src.find(brdf.shader), std::string::npos);
+
+  // The generated `#line k 0` still names its true line.
+  const std::vector<std::string> lines = linesOf(src);
+  bool sawGenerated = false;
+  for (size_t i = 0; i < lines.size(); ++i) {
+    if (lines[i].rfind("#line ", 0) == 0 && lines[i].substr(lines[i].size() - 2) == " 0") {
+      EXPECT_EQ(std::stoi(lines[i].substr(6)), static_cast<int>(i) + 2);
+      sawGenerated = true;
+    }
+  }
+  EXPECT_TRUE(sawGenerated);
+}
+
+TEST_F(Assembly, NoRenamingWithoutBuiltinNamedDeclarations) {
+  brdf.shader = "float reflectance(float x) { return x; }\n"  // a prefix of a built-in name
+                "vec3 BRDF(vec3 L, vec3 V, vec3 N, vec3 X, vec3 Y) {\n"
+                "  return reflect(-L, N) * reflectance(roughness);\n"
+                "}\n";
+  const std::string src = assembleProgram(spec).source;
+  EXPECT_EQ(src.find("#define reflect"), std::string::npos) << src;
+  EXPECT_EQ(src.find("#undef"), std::string::npos) << src;
+}
+
+// A synthetic file in the old-GLSL style: it overrides `reflect` with the mirror-about-N
+// convention and `smoothstep` with a hard step. It compiles, the built-ins stay available to
+// the generated code on both sides of the user text, and diagnostics keep their file lines.
+constexpr const char* kOverrideIntegrator =
+    "layout(local_size_x = 1) in;\n"
+    "layout(std430, set = 0, binding = 0) buffer O { vec4 o; };\n"
+    "void main() {\n"
+    "  vec3 n = vec3(0, 0, 1);\n"
+    "  vec3 r = reflect(vec3(0.6, 0, -0.8), n);\n"  // the built-in, vec3 version
+    "  o = vec4(BRDF(vec3(0.6, 0, 0.8), vec3(-0.6, 0, 0.8), n, vec3(1, 0, 0), vec3(0, 1, 0)),\n"
+    "           smoothstep(0.0, 1.0, r.z));\n"
+    "}\n";
+
+std::string overridingShader(const std::string& line5) {
+  return "vec3 reflect(vec3 d, vec3 n)\n"                                          // 10
+         "{ return 2.0 * dot(d, n) * n - d; }\n"                                   // 11
+         "float smoothstep(float lo, float hi, float x) { return x < lo ? 0.0 : 1.0; }\n"
+         "vec3 BRDF(vec3 L, vec3 V, vec3 N, vec3 X, vec3 Y) {\n"                   // 13
+         "  " + line5 + "\n"                                                       // 14
+         "  return vec3(smoothstep(0.9, 1.0, dot(reflect(L, N), V)) * roughness);\n"
+         "}\n";
+}
+
+TEST_F(Assembly, BuiltinOverridesCompileAndKeepLineNumbers) {
+  spec.integrator = kOverrideIntegrator;
+  spec.commonChunks = {"float chunkUsesBuiltin(vec3 v) { return reflect(v, vec3(0, 0, 1)).z; }"};
+  brdf.shaderFirstLine = 10;
+  brdf.shader = overridingShader("float unused = 1.0;");
+  Result<SpirvBinary> ok = compileGlsl(ShaderStage::Compute, assembleProgram(spec).source);
+  EXPECT_TRUE(ok.ok()) << (ok.ok() ? "" : ok.error().message) << "\n"
+                       << assembleProgram(spec).source;
+
+  brdf.shader = overridingShader("float broken = ;");
+  Result<SpirvBinary> bad = compileGlsl(ShaderStage::Compute, assembleProgram(spec).source);
+  ASSERT_FALSE(bad.ok());
+  ASSERT_FALSE(bad.error().diagnostics.empty());
+  EXPECT_EQ(bad.error().diagnostics.front().line, 14) << bad.error().diagnostics.front().message;
 }
 
 TEST(AssemblyNoBrdf, StillProducesAProgram) {
