@@ -72,7 +72,7 @@ Result<void> RendererImpl::runCheckKernel(const BrdfDefinition& brdf, const char
   PoolOwner res;
   res.device = ctx.device();
   VkDescriptorPoolSize sizes[3] = {{VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 6},
-                                   {VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, 1},
+                                   {VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, 5},
                                    {VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, 2}};
   VkDescriptorPoolCreateInfo pci{VK_STRUCTURE_TYPE_DESCRIPTOR_POOL_CREATE_INFO};
   pci.maxSets = 2;
@@ -88,7 +88,8 @@ Result<void> RendererImpl::runCheckKernel(const BrdfDefinition& brdf, const char
   BRDFA_VK_TRY(vkAllocateDescriptorSets(ctx.device(), &ai, sets));
   // Every binding gets a valid resource, used or not: lavapipe reads all bindings of a bound
   // set at dispatch and crashed on unwritten ones. The output stands in for the unused storage
-  // buffers, the furnace for the environment, the parameters for the unused transform.
+  // buffers, the furnace for the environment, the parameters for the unused transform, white
+  // for the textures.
   VkDescriptorBufferInfo outInfo{output->handle(), 0, VK_WHOLE_SIZE};
   VkDescriptorBufferInfo paramInfo{params->handle(), 0, VK_WHOLE_SIZE};
   VkDescriptorImageInfo envInfo{envSampler_, (*furnace)->cube.view(), VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL};
@@ -102,6 +103,7 @@ Result<void> RendererImpl::runCheckKernel(const BrdfDefinition& brdf, const char
     writes.push_back({VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET, nullptr, sets[1], binding, 0, 1,
                       VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, nullptr, &paramInfo, nullptr});
   vkUpdateDescriptorSets(ctx.device(), static_cast<uint32_t>(writes.size()), writes.data(), 0, nullptr);
+  writeDefaultTextures(sets[1]);  // textures read as white, the neutral value of DESIGN.md
 
   for (const auto& setting : settings) {
     std::vector<uint8_t> packed = layout.pack(brdf, setting);

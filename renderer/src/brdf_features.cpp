@@ -12,8 +12,9 @@ namespace {
 
 bool identChar(char c) { return std::isalnum(static_cast<unsigned char>(c)) || c == '_'; }
 
-// Whole-word occurrences of `word` in `text`.
-int countWord(std::string_view text, std::string_view word) {
+}  // namespace
+
+int countWholeWords(std::string_view text, std::string_view word) {
   int n = 0;
   for (size_t at = text.find(word); at != std::string_view::npos; at = text.find(word, at + 1)) {
     bool startOk = at == 0 || !identChar(text[at - 1]);
@@ -22,6 +23,8 @@ int countWord(std::string_view text, std::string_view word) {
   }
   return n;
 }
+
+namespace {
 
 // Names of the parameters of the first definition of `function` in `text`, e.g. BRDF(vec3 L,
 // vec3 V, ...) -> {L, V, ...}. Empty when not found.
@@ -57,6 +60,16 @@ std::vector<std::string> parameterNames(std::string_view text, std::string_view 
 BrdfFeatures detectFeatures(const BrdfDefinition& brdf) {
   BrdfFeatures f;
   const std::string code = brdf.shader + "\n" + brdf.sampleShader;
+  f.textures = false;
+  for (const char* t : {"iTexture0", "iTexture1", "iTexture2", "iTexture3"})
+    if (countWholeWords(code, t) > 0) f.textures = true;
+
+  if (brdf.format == BrdfFormat::Legacy) {
+    // render(L, N, V, textureCord, worldToLocal): the frame is its 5th parameter.
+    std::vector<std::string> names = parameterNames(code, "render");
+    f.tangentFrame = names.size() < 5 || names[4].empty() || countWholeWords(code, names[4]) > 1;
+    return f;
+  }
   // name -> number of signatures declaring it. X, Y are parameters 4 and 5 of both
   // BRDF(L, V, N, X, Y) and sampleBRDF(u, V, N, X, Y, out L, out pdf).
   std::map<std::string, int> declared;
@@ -70,7 +83,7 @@ BrdfFeatures detectFeatures(const BrdfDefinition& brdf) {
   if (declared.empty()) return f;
   f.tangentFrame = false;
   for (const auto& [name, signatures] : declared)
-    if (countWord(code, name) > signatures) f.tangentFrame = true;  // read beyond its declarations
+    if (countWholeWords(code, name) > signatures) f.tangentFrame = true;  // read beyond its declarations
   return f;
 }
 

@@ -1,17 +1,26 @@
 // What a BRDF's code reads, so programs compile in only what is used.
 #pragma once
 
+#include <string_view>
+
 #include "brdfa/brdf.h"
 
 namespace brdfa {
 
 struct BrdfFeatures {
   bool tangentFrame = true;  // BRDF() (or sampleBRDF()) reads its X or Y argument
+                             // (a legacy render(): its worldToLocal argument)
+  bool textures = true;      // the code names iTexture0..iTexture3
 };
 
 // Conservative: anything it cannot prove unused counts as used. X and Y are the 4th and 5th
 // parameters of BRDF()/sampleBRDF() under whatever names the file gives them; they count as
-// unused when those names occur nowhere in the code except in the signatures.
+// unused when those names occur nowhere in the code except in the signatures. Textures count as
+// unused when no iTextureN word occurs (a macro could still build the name; it then fails to
+// compile with an undeclared identifier, never reads garbage).
 BrdfFeatures detectFeatures(const BrdfDefinition& brdf);
+
+// Occurrences of `word` in `text` not inside a longer identifier.
+int countWholeWords(std::string_view text, std::string_view word);
 
 }  // namespace brdfa

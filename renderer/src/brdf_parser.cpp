@@ -17,6 +17,7 @@
 #include <vector>
 
 #include "brdfa/brdf.h"
+#include "brdf_features.h"
 
 namespace brdfa {
 
@@ -219,6 +220,24 @@ bool definesVec3Function(std::string_view text, std::string_view name) {
 bool definesBrdf(std::string_view text) { return definesVec3Function(text, "BRDF"); }
 bool definesSampler(std::string_view text) { return definesVec3Function(text, "sampleBRDF"); }
 bool definesLegacyRender(std::string_view text) { return definesVec3Function(text, "render"); }
+
+// The BRDFA Engine gave every BRDF the sliders iParameter0..8, floats in 0..1. A legacy file
+// gets those it reads as parameters (declared in the parameter block like any other, so the
+// file's unchanged text reads them); the engine's initial slider value is not recorded, 0.5
+// (mid-range) is this project's choice.
+void addLegacyParameters(BrdfDefinition& def) {
+  for (int i = 0; i <= 8; ++i) {
+    const std::string name = "iParameter" + std::to_string(i);
+    if (def.findParam(name) || countWholeWords(def.shader, name) == 0) continue;
+    BrdfParam p;
+    p.name = name;
+    p.type = ParamType::Float;
+    p.min = 0.0f;
+    p.max = 1.0f;
+    p.defaultValue = {0.5f, 0.0f, 0.0f};
+    def.params.push_back(std::move(p));
+  }
+}
 
 // ---------------------------------------------------------------------------------------------
 
@@ -464,6 +483,7 @@ bool Parser::parseLegacyWholeFile(std::string_view text) {
     def_.shader.push_back('\n');
   }
   def_.shaderFirstLine = 1;
+  addLegacyParameters(def_);
   return true;
 }
 
@@ -476,9 +496,10 @@ void Parser::finish(int lastLine) {
     error(0, "no '::begin shader' section: the file must define "
              "vec3 BRDF(vec3 L, vec3 V, vec3 N, vec3 X, vec3 Y)");
   } else if (!definesBrdf(def_.shader)) {
-    if (definesLegacyRender(def_.shader))
+    if (definesLegacyRender(def_.shader)) {
       def_.format = BrdfFormat::Legacy;
-    else
+      addLegacyParameters(def_);
+    } else
       error(shaderSectionLine_, "the shader section does not define "
                                 "vec3 BRDF(vec3 L, vec3 V, vec3 N, vec3 X, vec3 Y)");
   }

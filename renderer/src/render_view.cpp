@@ -66,7 +66,7 @@ Result<void> RenderViewImpl::init() {
 
   // New objects are built before the old ones are released, hence room for two scenes' worth.
   VkDescriptorPoolSize sizes[3] = {{VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 6},
-                                   {VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, 1},
+                                   {VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, 1 + 8 * kMaxObjects},
                                    {VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, 4 * kMaxObjects}};
   VkDescriptorPoolCreateInfo pci{VK_STRUCTURE_TYPE_DESCRIPTOR_POOL_CREATE_INFO};
   pci.flags = VK_DESCRIPTOR_POOL_CREATE_FREE_DESCRIPTOR_SET_BIT;
@@ -241,6 +241,7 @@ Result<std::vector<RenderViewImpl::ObjectState>> RenderViewImpl::buildObjects(co
       w[b].pBufferInfo = &infos[b];
     }
     vkUpdateDescriptorSets(ctx.device(), 2, w, 0, nullptr);
+    r_->writeDefaultTextures(o.set);
     out.push_back(std::move(o));
   }
   return out;

@@ -77,7 +77,27 @@ Result<void> RendererImpl::init(const RendererOptions& options) {
   sci.addressModeU = sci.addressModeV = sci.addressModeW = VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_EDGE;
   sci.maxLod = 0.0f;
   BRDFA_VK_TRY(vkCreateSampler(ctx_->device(), &sci, nullptr, &envSampler_));
+
+  sci.addressModeU = sci.addressModeV = sci.addressModeW = VK_SAMPLER_ADDRESS_MODE_REPEAT;
+  BRDFA_VK_TRY(vkCreateSampler(ctx_->device(), &sci, nullptr, &textureSampler_));
+  ImageSpec white;
+  white.format = VK_FORMAT_R8G8B8A8_UNORM;
+  white.usage = VK_IMAGE_USAGE_SAMPLED_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT;
+  auto image = Image::create(*ctx_, white);
+  if (!image) return image.takeError();
+  whiteTexture_ = std::move(image.value());
+  const uint32_t texel = 0xffffffffu;
+  BRDFA_TRY(uploadImage(*ctx_, whiteTexture_, &texel, sizeof texel));
   return {};
+}
+
+void RendererImpl::writeDefaultTextures(VkDescriptorSet objectSet) const {
+  VkDescriptorImageInfo info{textureSampler_, whiteTexture_.view(), VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL};
+  std::array<VkWriteDescriptorSet, 4> w{};
+  for (uint32_t i = 0; i < 4; ++i)
+    w[i] = {VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET, nullptr, objectSet, 2 + i, 0, 1,
+            VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, &info, nullptr, nullptr};
+  vkUpdateDescriptorSets(ctx_->device(), static_cast<uint32_t>(w.size()), w.data(), 0, nullptr);
 }
 
 RendererImpl::~RendererImpl() {
@@ -91,6 +111,8 @@ RendererImpl::~RendererImpl() {
   backgroundConstant_.reset();
   backgroundCube_.reset();
   if (envSampler_) vkDestroySampler(d, envSampler_, nullptr);
+  if (textureSampler_) vkDestroySampler(d, textureSampler_, nullptr);
+  whiteTexture_ = Image();
   if (gbufferPipeline_) vkDestroyPipeline(d, gbufferPipeline_, nullptr);
   if (gbufferPass_) vkDestroyRenderPass(d, gbufferPass_, nullptr);
   if (computeLayout_) vkDestroyPipelineLayout(d, computeLayout_, nullptr);
@@ -116,10 +138,13 @@ Result<void> RendererImpl::createLayouts() {
   li.pBindings = view.data();
   BRDFA_VK_TRY(vkCreateDescriptorSetLayout(d, &li, nullptr, &viewSetLayout_));
 
-  // Set 1: one object's BRDF parameters (shading) and transform (raster).
-  std::array<VkDescriptorSetLayoutBinding, 2> object{};
+  // Set 1: one object's BRDF parameters (shading), transform (raster) and textures
+  // iTexture0..3 (shading; lib/brdf_inputs.glsl).
+  std::array<VkDescriptorSetLayoutBinding, 6> object{};
   object[0] = {0, VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, 1, VK_SHADER_STAGE_COMPUTE_BIT, nullptr};
   object[1] = {1, VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, 1, VK_SHADER_STAGE_VERTEX_BIT | VK_SHADER_STAGE_FRAGMENT_BIT, nullptr};
+  for (uint32_t t = 0; t < 4; ++t)
+    object[2 + t] = {2 + t, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, 1, VK_SHADER_STAGE_COMPUTE_BIT, nullptr};
   li.bindingCount = static_cast<uint32_t>(object.size());
   li.pBindings = object.data();
   BRDFA_VK_TRY(vkCreateDescriptorSetLayout(d, &li, nullptr, &objectSetLayout_));
@@ -328,25 +353,29 @@ AssembledProgram RendererImpl::assembleShadeProgram(const BrdfDefinition& brdf, 
                                                     bool constantEnv) const {
   // The file's sampler is compiled in only where it is used: its code would otherwise count
   // towards the features the program needs (brdf_features.cpp).
-  const bool useSampler = sampling == SamplingMode::Brdf && brdf.hasSampler();
+  // A legacy render() file always runs the engine's uniform average (kernels/shade.comp.glsl).
+  const bool legacy = brdf.format == BrdfFormat::Legacy;
+  const bool useSampler = !legacy && sampling == SamplingMode::Brdf && brdf.hasSampler();
   BrdfDefinition used = brdf;
   if (!useSampler) used.sampleShader.clear();
   ProgramSpec spec;
   spec.brdf = &used;
-  spec.defines = {useSampler ? "BRDFA_SAMPLING_BRDF"
+  spec.defines = {legacy       ? "BRDFA_LEGACY_RENDER"
+                  : useSampler ? "BRDFA_SAMPLING_BRDF"
                   : sampling == SamplingMode::Uniform ? "BRDFA_SAMPLING_UNIFORM" : "BRDFA_SAMPLING_COSINE",
                   constantEnv ? "BRDFA_ENV_CONSTANT" : "BRDFA_ENV_CUBEMAP"};
-  if (detectFeatures(used).tangentFrame) spec.defines.push_back("BRDFA_TANGENT_FRAME");
+  const BrdfFeatures features = detectFeatures(used);
+  if (features.tangentFrame) spec.defines.push_back("BRDFA_TANGENT_FRAME");
+  if (features.textures) spec.defines.push_back("BRDFA_TEXTURES");
   for (const char* piece : {"lib/bindings.glsl", "lib/random.glsl", "lib/frame.glsl", "lib/sampling.glsl",
                             "lib/environment.glsl", "lib/brdf_inputs.glsl"})
     spec.commonChunks.push_back(sources_.get(piece));
+  if (legacy) spec.commonChunks.push_back(sources_.get("lib/legacy_inputs.glsl"));
   spec.integrator = sources_.get("kernels/shade.comp.glsl");
   return assembleProgram(spec);
 }
 
 Result<CompileInfo> RendererImpl::compileBrdf(const BrdfDefinition& brdf) {
-  if (brdf.format == BrdfFormat::Legacy)
-    return makeError(ErrorCode::Unsupported, "legacy render() BRDFs are not supported yet");
   // With its sampler when it has one, so a broken sample section is reported at validation.
   AssembledProgram program = assembleShadeProgram(brdf, SamplingMode::Brdf, false);
   CompileInfo info;
@@ -360,8 +389,6 @@ Result<CompileInfo> RendererImpl::compileBrdf(const BrdfDefinition& brdf) {
 
 Result<std::shared_ptr<const ShadeKernel>> RendererImpl::shadeKernel(const BrdfDefinition& brdf,
                                                                      SamplingMode sampling, bool constantEnv) {
-  if (brdf.format == BrdfFormat::Legacy)
-    return makeError(ErrorCode::Unsupported, "legacy render() BRDFs are not supported yet");
   return compiledKernel(assembleShadeProgram(brdf, sampling, constantEnv));
 }
 
@@ -388,6 +415,7 @@ Result<std::shared_ptr<const ShadeKernel>> RendererImpl::compiledKernel(const As
 AssembledProgram RendererImpl::assembleCheckProgram(const BrdfDefinition& brdf, const char* kernel) const {
   ProgramSpec spec;
   spec.brdf = &brdf;
+  if (detectFeatures(brdf).textures) spec.defines.push_back("BRDFA_TEXTURES");
   for (const char* piece : {"lib/bindings.glsl", "lib/random.glsl", "lib/sampling.glsl", "lib/brdf_inputs.glsl"})
     spec.commonChunks.push_back(sources_.get(piece));
   spec.integrator = sources_.get(std::string("kernels/") + kernel);

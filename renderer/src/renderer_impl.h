@@ -46,6 +46,9 @@ class RendererImpl final : public Renderer, public std::enable_shared_from_this<
     return (constantEnv ? backgroundConstant_ : backgroundCube_)->pipeline();
   }
   VkSampler environmentSampler() const { return envSampler_; }
+  // Binds the 1x1 white texture to the four texture slots (set 1, bindings 2..5) of `objectSet`:
+  // every slot of a bound set must hold a valid image (see brdf_check.cpp).
+  void writeDefaultTextures(VkDescriptorSet objectSet) const;
   bool hostResolve() const { return hostResolve_; }
 
   Result<std::shared_ptr<const GpuEnvironment>> environment(const std::string& name);
@@ -85,6 +88,8 @@ class RendererImpl final : public Renderer, public std::enable_shared_from_this<
   VkRenderPass gbufferPass_ = VK_NULL_HANDLE;
   VkPipeline gbufferPipeline_ = VK_NULL_HANDLE;
   VkSampler envSampler_ = VK_NULL_HANDLE;
+  VkSampler textureSampler_ = VK_NULL_HANDLE;  // iTexture0..3: linear, repeating
+  Image whiteTexture_;                          // 1x1 RGBA8 (1, 1, 1, 1): an unbound texture slot
   std::unique_ptr<ComputeKernel> resolve_, backgroundConstant_, backgroundCube_;
   bool hostResolve_ = false;
 

@@ -145,8 +145,8 @@ json JobManager::runItem(const JobItem& item) {
     if (r.infCount) log.push_back("check: " + std::to_string(r.infCount) + " infinite values");
     if (r.negativeCount) log.push_back("check: " + std::to_string(r.negativeCount) + " negative values");
   } else {
-    // The check could not run (e.g. Unsupported while it is not implemented): reported, and
-    // not held against the BRDF unless the check itself found a compile error.
+    // The check could not run (Unsupported for a legacy render() file, rendered but never
+    // analysed): reported, and not held against the BRDF unless it found a compile error.
     const Error& e = checked.error();
     out["checks"] = {{"error", errorName(e.code)}, {"message", e.message}};
     log.push_back("check: " + e.message);

@@ -3,6 +3,12 @@
 // with L_k from the sampler of this program (cosine-weighted, uniform, or the BRDF file's own
 // sampleBRDF(); all unbiased). Samples that are NaN or Inf are dropped and counted, never accumulated, and the
 // pixel's mean divides by the samples kept.
+//
+// A BRDFA Engine file (BRDFA_LEGACY_RENDER) is run as that engine ran it instead: the pixel is
+// the plain average of its render(L, N, V, texCoord, worldToLocal) over uniform hemisphere
+// samples, render() doing its own environment lookup and cosine. That is not an estimate of
+// L_o (it lacks the 2 pi of the uniform pdf, and whatever the file leaves out); it reproduces
+// the engine's images, and such files are marked "legacy" and never analysed.
 
 layout(local_size_x = 8, local_size_y = 8, local_size_z = 1) in;
 
@@ -41,7 +47,13 @@ void main() {
   vec3 sum = vec3(0.0);
   uint dropped = 0u;
   for (uint s = 0u; s < count; ++s) {
-#if defined(BRDFA_SAMPLING_BRDF)
+#if defined(BRDFA_LEGACY_RENDER)
+    float unusedWeight;
+    vec3 l = brdfa_sampleUniformHemisphere(brdfa_sample2D(rotation, first + s), unusedWeight);
+    vec3 L = X * l.x + Y * l.y + N * l.z;
+    // Rows X, Y, N: world (environment frame) -> local tangent space.
+    vec3 c = render(L, N, V, texCoord, transpose(mat3(X, Y, N)));
+#elif defined(BRDFA_SAMPLING_BRDF)
     // The file's own importance sampler: it returns f(L, V) and the solid-angle pdf of L.
     vec3 L;
     float pdf;

@@ -440,6 +440,69 @@ TEST_F(LibraryApi, BatchJobRequestsAreChecked) {
   }
 }
 
+// A file in the BRDFA Engine's format, as that engine's shaders/brdfs/*.brdf are written: bare
+// GLSL, its own #define PI, render() reading the skybox, a slider and the object's texture.
+constexpr const char* kEngineStyle = R"(#define PI 3.14159265359
+
+vec3 lambert_engine(vec3 L, vec3 N, vec2 uv) {
+    vec3 k_d = texture(iTexture0, uv).rgb;
+    return k_d * max(dot(L, N), 0.) / PI;
+}
+
+vec3 render(vec3 L, vec3 N, vec3 V, vec2 textureCord, mat3 worldToLocal){
+	vec3 envC = texture(skybox, L).rgb;
+	return envC * lambert_engine(L, N, textureCord) * 2. * PI * iParameter2;
+}
+)";
+
+TEST_F(LibraryApi, BrdfaEngineFileIsSavedAsLegacyRendersAndIsNotAnalysed) {
+  auto r = put("/api/brdfs/engine_style", kEngineStyle, "text/plain");
+  ASSERT_TRUE(r);
+  ASSERT_TRUE(r->status == 201 || r->status == 200) << r->body;
+  json saved = bodyJson(r);
+  EXPECT_EQ(saved["format"], "legacy");
+  ASSERT_EQ(saved["params"].size(), 1u) << r->body;
+  EXPECT_EQ(saved["params"][0]["name"], "iParameter2");
+  EXPECT_EQ(saved["params"][0]["min"], 0.0);
+  EXPECT_EQ(saved["params"][0]["max"], 1.0);
+
+  // The engine's plain average of render() over uniform directions: here 2 pi f cos with a
+  // white Lambertian in the furnace, so the mean is iParameter2 (set to 0.8), up to noise.
+  json body = {{"scene",
+                {{"environment", {{"name", "furnace"}, {"visible", false}}},
+                 {"objects", json::array({{{"brdf", "engine_style"}, {"params", {{"iParameter2", 0.8}}}}})},
+                 {"render", {{"width", 64}, {"height", 64}}}}},
+               {"spp", 256},
+               {"format", "pfm"}};
+  r = post("/api/render", body.dump());
+  ASSERT_TRUE(r);
+  ASSERT_EQ(r->status, 200) << r->body;
+  Image img;
+  ASSERT_TRUE(decodeImage(r->body, img));
+  auto interior = interiorPixels(img);
+  ASSERT_GT(interior.size(), 1000u);
+  double sum = 0;
+  for (auto [x, y] : interior) sum += img.lum(x, y);
+  EXPECT_NEAR(sum / interior.size(), 0.8, 0.01);
+
+  // The batch test compiles it and says why it has no numeric checks.
+  r = post("/api/jobs/validate", R"({"names": ["engine_style"]})");
+  ASSERT_TRUE(r);
+  ASSERT_EQ(r->status, 202) << r->body;
+  const std::string id = bodyJson(r)["id"].get<std::string>();
+  json job;
+  for (auto deadline = Clock::now() + std::chrono::seconds(60); Clock::now() < deadline;) {
+    job = bodyJson(get("/api/jobs/" + id));
+    if (job["state"] == "done") break;
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  }
+  ASSERT_EQ(job["state"], "done") << job.dump();
+  const json& res = job["results"][0];
+  EXPECT_EQ(res["ok"], true) << res.dump();
+  EXPECT_EQ(res["errors"], 0) << res.dump();
+  EXPECT_EQ(res["checks"]["error"], "unsupported") << res.dump();
+}
+
 TEST_F(LibraryApi, BatchJobOverAllRunsWhileTheStreamKeepsDelivering) {
   // A scene that never converges, so the stream has new frames all along.
   auto r = put("/api/sessions/default/scene", furnaceScene("lambert", json::object(), 32, 1 << 20, 1).dump());

@@ -207,16 +207,27 @@ TEST(BrdfParser, LegacyRenderFunctionIsDetected) {
       "{ return vec3(iParameter0); }\n::end shader\n");
   ASSERT_TRUE(r.ok()) << r.error().message;
   EXPECT_EQ(r->format, BrdfFormat::Legacy);
-  EXPECT_TRUE(r->params.empty());
+  // The engine's sliders it reads become parameters in 0..1.
+  ASSERT_EQ(r->params.size(), 1u);
+  EXPECT_EQ(r->params[0].name, "iParameter0");
 
-  // A bare GLSL source from the BRDFA Engine, with no sections at all.
+  // A bare GLSL source from the BRDFA Engine, with no sections at all: only the sliders it
+  // reads (iParameter3 and iParameter8; iParameter80 is another name).
   Result<BrdfDefinition> bare = parseBrdf(
-      "uniform float iParameter0;\n"
+      "#define PI 3.14159265359\n"
       "vec3 render(vec3 L, vec3 N, vec3 V, vec2 textureCord, mat3 worldToLocal)\n"
-      "{ return vec3(iParameter0); }\n");
+      "{ float iParameter80 = 1.0; return vec3(iParameter3 * iParameter8 * iParameter80); }\n");
   ASSERT_TRUE(bare.ok()) << bare.error().message;
   EXPECT_EQ(bare->format, BrdfFormat::Legacy);
   EXPECT_EQ(bare->shaderFirstLine, 1);
+  ASSERT_EQ(bare->params.size(), 2u);
+  EXPECT_EQ(bare->params[0].name, "iParameter3");
+  EXPECT_EQ(bare->params[1].name, "iParameter8");
+  for (const BrdfParam& p : bare->params) {
+    EXPECT_EQ(p.type, ParamType::Float);
+    EXPECT_EQ(p.min, 0.0f);
+    EXPECT_EQ(p.max, 1.0f);
+  }
 }
 
 TEST(BrdfParser, IsFuncSectionIsIgnoredWithAWarning) {

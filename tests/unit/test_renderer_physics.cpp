@@ -136,6 +136,43 @@ TEST_F(RendererPhysics, VisibleEnvironmentIsTheBackgroundAtItsIntensity) {
   EXPECT_NEAR(f.rgba32f[4 * (16 * 32 + 16)], 2.5f, 1e-5f);  // centre: white sphere
 }
 
+// BRDFA Engine render() files run as that engine ran them: the plain average of render() over
+// uniform hemisphere samples (DESIGN.md section 3), reading `skybox`, iParameter0..8,
+// iTexture0 and the world-to-local matrix.
+TEST_F(RendererPhysics, LegacyRenderIsThePlainAverageOverTheHemisphere) {
+  struct Case {
+    const char* body;
+    float expected;
+    float tolerance;
+  };
+  const Case cases[] = {
+      // skybox is the environment at intensity 1 (furnace: 1); iParameter0 defaults to 0.5.
+      {"return texture(skybox, L).rgb * iParameter0 * 2.0;", 1.0f, 1e-5f},
+      // The average of cos(theta) over uniform directions is 1/2: no cosine/pdf weighting.
+      {"return vec3(dot(L, N));", 0.5f, 0.01f},
+      // worldToLocal takes N to +z and L into the upper hemisphere.
+      {"vec3 l = worldToLocal * L; return vec3((worldToLocal * N).z * float(l.z >= 0.0));", 1.0f, 1e-5f},
+      // An unbound texture reads as white.
+      {"return texture(iTexture0, textureCord).rgb;", 1.0f, 1e-5f},
+  };
+  for (const Case& c : cases) {
+    std::string text = std::string("#define PI 3.14159265359\n"
+                                   "vec3 render(vec3 L, vec3 N, vec3 V, vec2 textureCord, mat3 worldToLocal) {\n") +
+                       c.body + "\n}\n";
+    auto brdf = inlineBrdf(text);
+    ASSERT_EQ(brdf->format, BrdfFormat::Legacy);
+    Scene s = furnaceScene(brdf, 48, 256);
+    s.render.sampling = SamplingMode::Brdf;  // ignored: a legacy file has one estimator
+    auto view = renderer_->createView().value();
+    auto set = view->setScene(s);
+    ASSERT_TRUE(set.ok()) << c.body << ": " << set.error().message;
+    Frame f = renderToConvergence(*view);
+    auto px = interior(f);
+    ASSERT_GT(px.size(), 300u) << c.body;
+    EXPECT_NEAR(mean(px), c.expected, c.tolerance) << c.body;
+  }
+}
+
 TEST_F(RendererPhysics, NanSamplesAreDroppedCountedAndNeverAccumulated) {
   // NaN for half of the hemisphere (L.x > 0), a white Lambertian elsewhere. The kept samples
   // still estimate the furnace exactly, so every pixel stays 1.
