@@ -317,7 +317,7 @@ Result<std::unique_ptr<ComputeKernel>> RendererImpl::compileFixedKernel(const st
 }
 
 Result<std::shared_ptr<const SpirvBinary>> RendererImpl::spirv(ShaderStage stage, const std::string& source,
-                                                               bool* cached) {
+                                                               bool* cached, bool compileOnMiss) {
   static const std::string compiler = compilerVersion();
   uint64_t key = fnv1a64(source, fnv1a64(compiler) ^ static_cast<uint64_t>(stage));
   {
@@ -335,6 +335,8 @@ Result<std::shared_ptr<const SpirvBinary>> RendererImpl::spirv(ShaderStage stage
     auto binary = std::make_shared<SpirvBinary>();
     binary->words = std::move(*words);
     shared = binary;
+  } else if (!compileOnMiss) {
+    return makeError(ErrorCode::NotFound, "program not in the SPIR-V cache");
   } else {
     ++glslCompiles_;
     auto compiled = compileGlsl(stage, source);
@@ -392,16 +394,35 @@ Result<std::shared_ptr<const ShadeKernel>> RendererImpl::shadeKernel(const BrdfD
   return compiledKernel(assembleShadeProgram(brdf, sampling, constantEnv));
 }
 
-Result<std::shared_ptr<const ShadeKernel>> RendererImpl::compiledKernel(const AssembledProgram& program) {
+Result<int> RendererImpl::preloadFromCache(const BrdfDefinition& brdf) {
+  int built = 0;
+  for (SamplingMode sampling : {SamplingMode::Cosine, SamplingMode::Uniform, SamplingMode::Brdf}) {
+    if (sampling == SamplingMode::Brdf && !brdf.hasSampler()) continue;  // same program as cosine
+    for (bool constantEnv : {false, true}) {
+      bool created = false;
+      auto kernel = compiledKernel(assembleShadeProgram(brdf, sampling, constantEnv), /*compileOnMiss=*/false, &created);
+      if (!kernel) {
+        if (kernel.error().code == ErrorCode::NotFound) continue;  // never compiled before
+        return kernel.takeError();
+      }
+      built += created ? 1 : 0;
+    }
+  }
+  return built;
+}
+
+Result<std::shared_ptr<const ShadeKernel>> RendererImpl::compiledKernel(const AssembledProgram& program,
+                                                                        bool compileOnMiss, bool* created) {
   // Held across creation so concurrent requests for one program JIT it once.
   std::lock_guard<std::mutex> lock(kernelMutex_);
   auto it = kernelCache_.find(program.hash);
   if (it != kernelCache_.end()) return it->second;
-  auto code = spirv(ShaderStage::Compute, program.source, nullptr);
+  auto code = spirv(ShaderStage::Compute, program.source, nullptr, compileOnMiss);
   if (!code) return code.takeError();
   auto kernel = createComputeKernel((*code)->words);
   if (!kernel) return kernel.takeError();
   ++pipelinesCreated_;
+  if (created) *created = true;
   auto compiled = std::make_shared<ShadeKernel>();
   compiled->kernel = std::move(kernel.value());
   compiled->params = program.params;

@@ -29,6 +29,7 @@ class RendererImpl final : public Renderer, public std::enable_shared_from_this<
   Result<std::unique_ptr<RenderView>> createView() override;
   Result<BrdfCheckReport> checkBrdf(const BrdfDefinition& brdf) override;
   Result<SamplerCheckReport> checkSampler(const BrdfDefinition& brdf) override;
+  Result<int> preloadFromCache(const BrdfDefinition& brdf) override;
   RendererCounters counters() const override;
   std::vector<std::string> environmentNames() const override;
   std::vector<std::string> meshNames() const override;
@@ -66,8 +67,10 @@ class RendererImpl final : public Renderer, public std::enable_shared_from_this<
   Result<std::unique_ptr<ComputeKernel>> compileFixedKernel(const std::vector<std::string>& defines,
                                                             const std::vector<std::string>& pieces,
                                                             const std::vector<std::string>& extensions = {});
-  // GLSL -> SPIR-V through the content-addressed cache (key: hash of source + compiler).
-  Result<std::shared_ptr<const SpirvBinary>> spirv(ShaderStage stage, const std::string& source, bool* cached);
+  // GLSL -> SPIR-V through the content-addressed cache (key: hash of source + compiler). With
+  // `compileOnMiss` false a program in neither cache is NotFound instead of compiled.
+  Result<std::shared_ptr<const SpirvBinary>> spirv(ShaderStage stage, const std::string& source, bool* cached,
+                                                   bool compileOnMiss = true);
   AssembledProgram assembleShadeProgram(const BrdfDefinition& brdf, SamplingMode sampling, bool constantEnv) const;
   // A check kernel (kernels/<kernel>) specialized to `brdf`.
   AssembledProgram assembleCheckProgram(const BrdfDefinition& brdf, const char* kernel) const;
@@ -77,7 +80,9 @@ class RendererImpl final : public Renderer, public std::enable_shared_from_this<
                               uint32_t outputVec4s, const std::vector<std::map<std::string, Vec3>>& settings,
                               const std::function<void(const float*)>& consume);
   // The pipeline of an assembled program; compiled once, then served from the cache.
-  Result<std::shared_ptr<const ShadeKernel>> compiledKernel(const AssembledProgram& program);
+  // `created` (optional) tells whether this call built the pipeline.
+  Result<std::shared_ptr<const ShadeKernel>> compiledKernel(const AssembledProgram& program,
+                                                            bool compileOnMiss = true, bool* created = nullptr);
 
   std::unique_ptr<VkContext> ctx_;  // declared first: destroyed last
   ShaderSources sources_;

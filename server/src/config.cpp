@@ -44,6 +44,10 @@ std::string usageText(const char* program) {
          "  --idle-timeout S  seconds a session keeps rendering without a watcher (default 30)\n"
          "  --no-cache-load   ignore cached SPIR-V (<data-dir>/cache/spirv), compile afresh and\n"
          "                    refresh the cache\n"
+         "  --hot-load        after start-up, build in the background the pipelines of every\n"
+         "                    BRDF whose SPIR-V is cached (never compiling GLSL), so BRDFs used\n"
+         "                    before are instant on first use; without it BRDFs compile on\n"
+         "                    first use and start-up prepares nothing\n"
          "  --help            show this text\n"
          "On start prints one line `listening on http://HOST:PORT` to stdout.\n";
 }
@@ -63,6 +67,10 @@ ParseOutcome parse_command_line(int argc, const char* const* argv) {
     }
     if (arg == "--no-cache-load") {
       config.loadCache = false;
+      continue;
+    }
+    if (arg == "--hot-load") {
+      config.hotLoad = true;
       continue;
     }
     // Accept both `--flag value` and `--flag=value`.

@@ -84,11 +84,25 @@ void registerSystemRoutes(httplib::Server& server, Service& service) {
 
   server.Get("/api/health", [&service](const httplib::Request&, httplib::Response& res) {
     const DeviceInfo& d = service.renderer->device();
+    const RendererCounters c = service.renderer->counters();
+    const HotLoadProgress hot = service.hotLoader.progress();
     sendJson(res,
              {{"status", "ok"},
               {"device", {{"name", d.name}, {"type", d.type}, {"driver", d.driver}, {"api_version", d.apiVersion}}},
               {"sessions", service.sessions->list().size()},
-              {"streams", service.activeStreams.load()}});
+              {"streams", service.activeStreams.load()},
+              {"compiler",
+               {{"glsl_compiles", c.glslCompiles},
+                {"spirv_cache_hits", c.spirvCacheHits},
+                {"spirv_disk_hits", c.spirvDiskHits},
+                {"pipelines_created", c.pipelinesCreated}}},
+              {"hot_load",
+               {{"enabled", hot.enabled},
+                {"done", hot.done},
+                {"brdfs", hot.brdfs},
+                {"visited", hot.visited},
+                {"pipelines", hot.pipelines},
+                {"ms", hot.ms}}}});
   });
 }
 

@@ -79,6 +79,7 @@ Result<std::unique_ptr<Service>> Service::create(const ServerConfig& config, std
     log.push_back("warning: " + msg);
   for (std::string& msg : service->library.loadUserDir(service->userBrdfDir())) log.push_back("warning: " + msg);
   service->jobs = std::make_unique<JobManager>(service->renderer);
+  if (config.hotLoad) service->hotLoader.start(service->renderer, service->library.list());
 
   service->sessions = std::make_unique<SessionManager>(
       service->renderer, std::chrono::milliseconds(std::chrono::seconds(config.idleTimeoutSec)), kMaxSessions);
@@ -118,6 +119,7 @@ std::string Service::presetDir(const std::string& brdf) const {
 void Service::beginShutdown() {
   stopping = true;
   if (jobs) jobs->stop();
+  hotLoader.stop();
   renderSlots.shutdown();
   if (sessions) sessions->stopAll();
 }

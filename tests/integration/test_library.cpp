@@ -59,9 +59,12 @@ std::string lambertVersion(int k) {
 }
 
 // A server on `dataDir`; fails the test when it does not start.
-std::unique_ptr<ServerProcess> startOn(const std::string& dataDir, std::string* error = nullptr) {
+std::unique_ptr<ServerProcess> startOn(const std::string& dataDir, std::string* error = nullptr,
+                                       const std::vector<std::string>& extraArgs = {}) {
   auto s = std::make_unique<ServerProcess>();
-  std::string err = s->start({"--data-dir", dataDir, "--idle-timeout", "3"});
+  std::vector<std::string> args = {"--data-dir", dataDir, "--idle-timeout", "3"};
+  args.insert(args.end(), extraArgs.begin(), extraArgs.end());
+  std::string err = s->start(args);
   if (error) *error = err;
   if (!err.empty()) ADD_FAILURE() << "server did not start: " << err;
   return s;
@@ -127,6 +130,52 @@ TEST(Library, SavedBrdfSurvivesRestartAndRenders) {
   EXPECT_EQ(s->terminate(), 0);
   s = startOn(dir.path);
   EXPECT_FALSE(contains(listNames(*s), "saved_one"));
+  EXPECT_EQ(s->terminate(), 0);
+}
+
+// --hot-load builds, after start-up, the pipelines of BRDFs compiled in an earlier run (from
+// the SPIR-V disk cache, compiling nothing); without it start-up prepares nothing.
+TEST(Library, HotLoadBuildsCachedPipelinesWithoutCompiling) {
+  TempDir dir;
+  json body = furnaceScene("hot_one", json::object(), 24, 4);
+  body["spp"] = 4;
+  auto s = startOn(dir.path);
+  ASSERT_TRUE(s->running());
+  auto r = s->client()->Put("/api/brdfs/hot_one", kLambertWhite, "text/plain");
+  ASSERT_TRUE(r && r->status == 201) << (r ? r->body : "no answer");
+  r = s->client()->Post("/api/render", body.dump(), "application/json");  // the furnace variant
+  ASSERT_TRUE(r && r->status == 200);
+  EXPECT_EQ(s->terminate(), 0);
+
+  // Without the flag: nothing built at start.
+  s = startOn(dir.path);
+  json health = bodyJson(s->client()->Get("/api/health"));
+  EXPECT_EQ(health["hot_load"]["enabled"], false) << health.dump();
+  EXPECT_EQ(health["compiler"]["pipelines_created"], 0) << health.dump();
+  EXPECT_EQ(s->terminate(), 0);
+
+  s = startOn(dir.path, nullptr, {"--hot-load"});
+  ASSERT_TRUE(s->running());
+  for (auto deadline = Clock::now() + std::chrono::seconds(120); Clock::now() < deadline;) {
+    health = bodyJson(s->client()->Get("/api/health"));
+    if (health["hot_load"]["done"] == true) break;
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  }
+  ASSERT_EQ(health["hot_load"]["done"], true) << health.dump();
+  EXPECT_EQ(health["hot_load"]["enabled"], true);
+  // hot_one was compiled in two variants (PUT validation: cubemap; the render: furnace).
+  EXPECT_GE(health["hot_load"]["pipelines"], 2) << health.dump();
+  EXPECT_EQ(health["hot_load"]["visited"], health["hot_load"]["brdfs"]);
+  EXPECT_EQ(health["compiler"]["glsl_compiles"], 0) << "hot-load must never compile: " << health.dump();
+  const json created = health["compiler"]["pipelines_created"];
+  EXPECT_EQ(created, health["hot_load"]["pipelines"]);
+
+  // Its first use is served by the preloaded pipeline.
+  r = s->client()->Post("/api/render", body.dump(), "application/json");
+  ASSERT_TRUE(r && r->status == 200);
+  health = bodyJson(s->client()->Get("/api/health"));
+  EXPECT_EQ(health["compiler"]["pipelines_created"], created) << health.dump();
+  EXPECT_EQ(health["compiler"]["glsl_compiles"], 0) << health.dump();
   EXPECT_EQ(s->terminate(), 0);
 }
 

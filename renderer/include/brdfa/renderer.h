@@ -156,6 +156,12 @@ class Renderer {
   // Runs the sampler checks above; InvalidArgument when the file has no sample section.
   virtual Result<SamplerCheckReport> checkSampler(const BrdfDefinition& brdf) = 0;
 
+  // --hot-load (the BRDFA Engine's "hot start"): builds the shading pipelines of `brdf`, in every
+  // sampling and environment variant, whose SPIR-V is already in the memory or disk cache;
+  // never compiles GLSL. Returns how many pipelines it built (0 when none was cached or all
+  // were already built). Thread-safe.
+  virtual Result<int> preloadFromCache(const BrdfDefinition& brdf) = 0;
+
   virtual RendererCounters counters() const = 0;
 
   virtual std::vector<std::string> environmentNames() const = 0;

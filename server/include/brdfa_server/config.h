@@ -15,6 +15,7 @@ struct ServerConfig {
   std::string deviceName;          // substring of the Vulkan device name; empty = best device
   int threads = 64;                // HTTP workers; every stream client holds one
   bool loadCache = true;           // --no-cache-load: compile afresh, then refresh the cache
+  bool hotLoad = false;            // --hot-load: build cached BRDFs' pipelines after start-up
   int idleTimeoutSec = 30;         // a session with no watcher for this long stops rendering
 };
 

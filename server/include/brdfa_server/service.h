@@ -13,6 +13,7 @@
 #include "brdfa/renderer.h"
 #include "brdfa_server/brdf_library.h"
 #include "brdfa_server/config.h"
+#include "brdfa_server/hot_load.h"
 #include "brdfa_server/jobs.h"
 #include "brdfa_server/scene_json.h"
 #include "brdfa_server/session_manager.h"
@@ -68,6 +69,7 @@ struct Service {
   BrdfLibrary library;
   std::unique_ptr<SessionManager> sessions;
   std::unique_ptr<JobManager> jobs;  // batch tests; its workers stop in beginShutdown
+  HotLoader hotLoader;               // --hot-load; stops in beginShutdown
   RenderSlots renderSlots{kMaxConcurrentRenders, kMaxQueuedRenders};
   // Requests that hold an HTTP worker for long (streams, frame waits) are capped below the
   // worker count so that short requests (stats, scene edits, health) always find a worker.
