@@ -4,6 +4,8 @@
 #include <cmath>
 #include <cstring>
 
+#include "brdf_features.h"
+#include "chi_square.h"
 #include "renderer_impl.h"
 #include "vk_check.h"
 
@@ -12,9 +14,17 @@ namespace brdfa {
 namespace {
 
 constexpr uint32_t kViews = 40;  // BRDFA_VIEWS in check.comp.glsl
-// check_sampler.comp.glsl: 4 views x 32 chunks of 2048 samples, 128 cells + 2 summary vec4.
+// check_sampler.comp.glsl: 4 views x 32 chunks of 2048 samples, 128 cells + 2 summary vec4 +
+// the chi-square histogram of 10 x 20 cells (four counts to a vec4) per chunk; then, with
+// pdfBRDF, one invocation per 4 chi-square cells and view computing their probabilities.
 constexpr uint32_t kSamplerViews = 4, kSamplerChunks = 32, kChunkSamples = 2048, kCells = 128;
-constexpr uint32_t kSamplerStride = kCells + 2;
+constexpr int kSamplerViewDeg[kSamplerViews] = {0, 30, 60, 80};  // BRDFA_VIEW_DEG
+constexpr uint32_t kChi2Cells = 10 * 20, kChi2Vec4s = kChi2Cells / 4;
+constexpr uint32_t kSamplerStride = kCells + 2 + kChi2Vec4s;
+constexpr uint32_t kSamplingInvocations = kSamplerViews * kSamplerChunks;
+constexpr uint32_t kExpectedInvocations = kSamplerViews * kChi2Vec4s;
+constexpr double kChi2Significance = 0.01;  // pbrt-v4's CHI2_SLEVEL, before the Sidak correction
+constexpr double kChi2MinExpected = 5.0;    // pbrt-v4's CHI2_MINFREQ: smaller cells are pooled
 
 // The parameter settings checked: all defaults, then each parameter alone at its minimum and
 // its maximum (colors at black and white, bools at false and true).
@@ -147,13 +157,18 @@ Result<BrdfCheckReport> RendererImpl::checkBrdf(const BrdfDefinition& brdf) {
 Result<SamplerCheckReport> RendererImpl::checkSampler(const BrdfDefinition& brdf) {
   if (!brdf.hasSampler()) return makeError(ErrorCode::InvalidArgument, "the BRDF has no '::begin sample' section");
   SamplerCheckReport report;
-  const uint32_t invocations = kSamplerViews * kSamplerChunks;
+  // The same detection decides BRDFA_HAS_PDF in assembleCheckProgram.
+  report.chi2Run = detectFeatures(brdf).samplerPdf;
+  if (report.chi2Run) report.chi2Threshold = sidakSignificance(kChi2Significance, kSamplerViews);
+  const uint32_t invocations = kSamplingInvocations + (report.chi2Run ? kExpectedInvocations : 0);
+  const uint32_t outputVec4s = kSamplingInvocations * kSamplerStride + kExpectedInvocations;
   const double perView = double(kSamplerChunks) * kChunkSamples;
   const double cellSolidAngle = 2.0 * 3.14159265358979323846 / kCells;
-  auto ran = runCheckKernel(brdf, "check_sampler.comp.glsl", invocations, invocations * kSamplerStride, {{}},
+  auto ran = runCheckKernel(brdf, "check_sampler.comp.glsl", invocations, outputVec4s, {{}},
                             [&](const float* out) {
     for (uint32_t view = 0; view < kSamplerViews; ++view) {
       std::vector<double> cells(3 * kCells, 0.0);
+      std::vector<double> observed(kChi2Cells, 0.0);
       double albedo[4] = {0, 0, 0, 0};  // sampled sum, sum of squares; cosine sum, sum of squares
       for (uint32_t chunk = 0; chunk < kSamplerChunks; ++chunk) {
         const float* base = out + 4 * size_t((view * kSamplerChunks + chunk) * kSamplerStride);
@@ -166,6 +181,9 @@ Result<SamplerCheckReport> RendererImpl::checkSampler(const BrdfDefinition& brdf
         albedo[1] += summary[3];
         albedo[2] += summary[4];
         albedo[3] += summary[5];
+        report.maxPdfMismatch = std::max(report.maxPdfMismatch, double(summary[6]));
+        const float* histogram = summary + 8;
+        for (uint32_t c = 0; c < kChi2Cells; ++c) observed[c] += histogram[c];
       }
       report.samples += static_cast<uint64_t>(perView);
       for (uint32_t c = 0; c < kCells; ++c) {
@@ -188,6 +206,21 @@ Result<SamplerCheckReport> RendererImpl::checkSampler(const BrdfDefinition& brdf
       double sd = std::sqrt(vs + vc);
       double z = sd > 0 ? std::fabs(ms - mc) / sd : (ms == mc ? 0.0 : INFINITY);
       report.maxAlbedoZ = std::max(report.maxAlbedoZ, z);
+
+      if (!report.chi2Run) continue;
+      // Expected counts: each cell's probability under pdfBRDF times every draw of the view,
+      // rejected ones included (a sampler that rejects more than its pdf says comes up short in
+      // every cell). The cells cover the upper hemisphere only; the mass pdfBRDF puts below it
+      // is what the rejected draws should carry, and is not a cell (see docs/api.md).
+      const float* probability = out + 4 * size_t(kSamplingInvocations * kSamplerStride + view * kChi2Vec4s);
+      std::vector<double> expected(kChi2Cells);
+      for (uint32_t c = 0; c < kChi2Cells; ++c) expected[c] = double(probability[c]) * perView;
+      ChiSquareResult chi2 = chiSquareTest(observed, expected, kChi2MinExpected);
+      if (!chi2.failure.empty() && report.chi2Failure.empty())
+        report.chi2Failure = "view at " + std::to_string(kSamplerViewDeg[view]) + " degrees: " + chi2.failure;
+      // pValue is 0 on failure, never NaN: std::min keeps the smallest.
+      report.minChi2PValue = std::min(report.minChi2PValue, chi2.pValue);
+      report.chi2PValues.push_back(chi2.pValue);
     }
   });
   if (!ran) return ran.takeError();

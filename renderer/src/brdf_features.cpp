@@ -55,10 +55,51 @@ std::vector<std::string> parameterNames(std::string_view text, std::string_view 
   return {};
 }
 
+// `text` with each // and /* */ comment replaced by one space.
+std::string withoutComments(std::string_view text) {
+  std::string out;
+  out.reserve(text.size());
+  for (size_t i = 0; i < text.size();) {
+    if (text.compare(i, 2, "//") == 0) {
+      i = text.find('\n', i);
+      if (i == std::string_view::npos) break;
+      out += ' ';
+    } else if (text.compare(i, 2, "/*") == 0) {
+      size_t end = text.find("*/", i + 2);
+      i = end == std::string_view::npos ? text.size() : end + 2;
+      out += ' ';
+    } else {
+      out += text[i++];
+    }
+  }
+  return out;
+}
+
 }  // namespace
+
+bool definesFunction(std::string_view code, std::string_view type, std::string_view name) {
+  const std::string text = withoutComments(code);
+  auto skipSpace = [&](size_t i) {
+    while (i < text.size() && std::isspace(static_cast<unsigned char>(text[i]))) ++i;
+    return i;
+  };
+  for (size_t at = text.find(type); at != std::string::npos; at = text.find(type, at + 1)) {
+    if (at > 0 && identChar(text[at - 1])) continue;
+    const size_t afterType = at + type.size();
+    const size_t nameStart = skipSpace(afterType);
+    if (nameStart == afterType) continue;  // "floatx" or "float(": not a declaration
+    if (text.compare(nameStart, name.size(), name) != 0) continue;
+    size_t i = nameStart + name.size();
+    if (i < text.size() && identChar(text[i])) continue;
+    i = skipSpace(i);
+    if (i < text.size() && text[i] == '(') return true;
+  }
+  return false;
+}
 
 BrdfFeatures detectFeatures(const BrdfDefinition& brdf) {
   BrdfFeatures f;
+  f.samplerPdf = brdf.hasSampler() && definesFunction(brdf.sampleShader, "float", "pdfBRDF");
   const std::string code = brdf.shader + "\n" + brdf.sampleShader;
   f.textures = false;
   for (const char* t : {"iTexture0", "iTexture1", "iTexture2", "iTexture3"})

@@ -11,6 +11,7 @@ struct BrdfFeatures {
   bool tangentFrame = true;  // BRDF() (or sampleBRDF()) reads its X or Y argument
                              // (a legacy render(): its worldToLocal argument)
   bool textures = true;      // the code names iTexture0..iTexture3
+  bool samplerPdf = false;   // the sample section defines float pdfBRDF(...) (our extension)
 };
 
 // Conservative: anything it cannot prove unused counts as used. X and Y are the 4th and 5th
@@ -18,7 +19,14 @@ struct BrdfFeatures {
 // unused when those names occur nowhere in the code except in the signatures. Textures count as
 // unused when no iTextureN word occurs (a macro could still build the name; it then fails to
 // compile with an undeclared identifier, never reads garbage).
+// samplerPdf is set when the sample section, outside its // and /* */ comments, has
+// `float pdfBRDF (` with whole words (a declaration without a body, or one inside an inactive
+// #if, still counts: the check kernel then fails to compile, with the file's own line numbers).
 BrdfFeatures detectFeatures(const BrdfDefinition& brdf);
+
+// True when `code`, with its // and /* */ comments removed, contains `<type> <name> (` with
+// `type` and `name` as whole words.
+bool definesFunction(std::string_view code, std::string_view type, std::string_view name);
 
 // Occurrences of `word` in `text` not inside a longer identifier.
 int countWholeWords(std::string_view text, std::string_view word);

@@ -436,7 +436,9 @@ Result<std::shared_ptr<const ShadeKernel>> RendererImpl::compiledKernel(const As
 AssembledProgram RendererImpl::assembleCheckProgram(const BrdfDefinition& brdf, const char* kernel) const {
   ProgramSpec spec;
   spec.brdf = &brdf;
-  if (detectFeatures(brdf).textures) spec.defines.push_back("BRDFA_TEXTURES");
+  const BrdfFeatures features = detectFeatures(brdf);
+  if (features.textures) spec.defines.push_back("BRDFA_TEXTURES");
+  if (features.samplerPdf) spec.defines.push_back("BRDFA_HAS_PDF");  // check_sampler: chi-square test
   for (const char* piece : {"lib/bindings.glsl", "lib/random.glsl", "lib/sampling.glsl", "lib/brdf_inputs.glsl"})
     spec.commonChunks.push_back(sources_.get(piece));
   spec.integrator = sources_.get(std::string("kernels/") + kernel);

@@ -6,29 +6,88 @@
 //  - sums f cos / pdf (importance-sampled albedo, channel of largest value) and the same from
 //    cosine-weighted samples of BRDF(), whose means must agree;
 //  - records the largest relative difference between the returned value and BRDF(L, V).
-// Output (vec4) per invocation: 128 cells (count, sum 1/pdf, sum 1/pdf^2, 0), then
+// With BRDFA_HAS_PDF (the sample section defines pdfBRDF(L, V, N, X, Y)), also the chi-square
+// test of pbrt-v4 (src/pbrt/bsdfs_test.cpp) on the hemisphere:
+//  - draws a second sample per iteration, from independent uniform numbers (hash of a counter),
+//    and counts the accepted ones per cell of a 10 x 20 grid uniform in theta in [0, pi/2] and
+//    phi in [-pi, pi) (cell = theta row * 20 + phi column);
+//  - records the largest relative difference between the pdf those samples returned and
+//    pdfBRDF(L, V);
+//  - BRDFA_EXPECTED_INVOCATIONS further invocations (after the sampling ones) integrate
+//    pdfBRDF(L, V) sin(theta) dtheta dphi over each cell by composite 2D Simpson: each cell's
+//    probability. The host turns both into a chi-square statistic per view.
+// Output (vec4) per sampling invocation: 128 cells (count, sum 1/pdf, sum 1/pdf^2, 0), then
 // (rejected, mismatch, albedo sum, albedo sum of squares), then (cosine albedo sum, its sum of
-// squares, 0, 0).
+// squares, pdf mismatch, 0), then the 200 chi-square cell counts, four to a vec4. After all
+// sampling invocations: per view, the 200 cell probabilities, four to a vec4 (written only with
+// BRDFA_HAS_PDF).
 layout(local_size_x = 8, local_size_y = 1, local_size_z = 1) in;
 
 const uint BRDFA_CELLS = 128u;
-const uint BRDFA_STRIDE = BRDFA_CELLS + 2u;
+const uint BRDFA_CHI2_THETA = 10u, BRDFA_CHI2_PHI = 20u;       // chi-square grid
+const uint BRDFA_CHI2_CELLS = BRDFA_CHI2_THETA * BRDFA_CHI2_PHI;
+const uint BRDFA_CHI2_VEC4S = BRDFA_CHI2_CELLS / 4u;
+const uint BRDFA_STRIDE = BRDFA_CELLS + 2u + BRDFA_CHI2_VEC4S;
+const uint BRDFA_VIEWS = 4u;
 const uint BRDFA_CHUNKS = 32u;          // invocations per view
 const uint BRDFA_CHUNK_SAMPLES = 2048u;
+const uint BRDFA_EXPECTED_INVOCATIONS = BRDFA_VIEWS * BRDFA_CHI2_VEC4S;  // one per 4 cells
+const uint BRDFA_SIMPSON = 16u;         // Simpson intervals per dimension and cell (even)
 const float BRDFA_VIEW_DEG[4] = float[](0.0, 30.0, 60.0, 80.0);
 
 float brdfa_largest(vec3 v) { return max(v.x, max(v.y, v.z)); }
 
+#if defined(BRDFA_HAS_PDF)
+// The probability that sampleBRDF draws L in chi-square cell `cell` for view V: the integral of
+// pdfBRDF(L, V) sin(theta) over the cell's theta x phi rectangle, by composite Simpson with
+// BRDFA_SIMPSON intervals in each dimension (weights 1 4 2 4 ... 2 4 1, times h/3 per axis).
+float brdfa_cellProbability(uint cell, vec3 V, vec3 N, vec3 X, vec3 Y) {
+  const float dTheta = 0.5 * BRDFA_PI / float(BRDFA_CHI2_THETA), dPhi = 2.0 * BRDFA_PI / float(BRDFA_CHI2_PHI);
+  float theta0 = float(cell / BRDFA_CHI2_PHI) * dTheta;
+  float phi0 = -BRDFA_PI + float(cell % BRDFA_CHI2_PHI) * dPhi;
+  float ht = dTheta / float(BRDFA_SIMPSON), hp = dPhi / float(BRDFA_SIMPSON);
+  float sum = 0.0;
+  for (uint i = 0u; i <= BRDFA_SIMPSON; ++i) {
+    float wi = (i == 0u || i == BRDFA_SIMPSON) ? 1.0 : ((i & 1u) == 1u ? 4.0 : 2.0);
+    float theta = theta0 + float(i) * ht;
+    float st = sin(theta), ct = cos(theta);
+    float row = 0.0;
+    for (uint j = 0u; j <= BRDFA_SIMPSON; ++j) {
+      float wj = (j == 0u || j == BRDFA_SIMPSON) ? 1.0 : ((j & 1u) == 1u ? 4.0 : 2.0);
+      float phi = phi0 + float(j) * hp;
+      vec3 L = X * (st * cos(phi)) + Y * (st * sin(phi)) + N * ct;
+      row += wj * pdfBRDF(L, V, N, X, Y);
+    }
+    sum += wi * st * row;
+  }
+  return sum * (ht / 3.0) * (hp / 3.0);
+}
+#endif
+
 void main() {
   uint id = gl_GlobalInvocationID.x;
-  if (id >= 4u * BRDFA_CHUNKS) return;
-  uint view = id / BRDFA_CHUNKS, chunk = id % BRDFA_CHUNKS;
   const vec3 N = vec3(0.0, 0.0, 1.0), X = vec3(1.0, 0.0, 0.0), Y = vec3(0.0, 1.0, 0.0);
+  texCoord = vec2(0.5);
+  if (id >= BRDFA_VIEWS * BRDFA_CHUNKS) {
+#if defined(BRDFA_HAS_PDF)
+    uint e = id - BRDFA_VIEWS * BRDFA_CHUNKS;  // expected-probability invocation
+    if (e >= BRDFA_EXPECTED_INVOCATIONS) return;
+    uint eView = e / BRDFA_CHI2_VEC4S, first = 4u * (e % BRDFA_CHI2_VEC4S);
+    float tv = radians(BRDFA_VIEW_DEG[eView]);
+    vec3 V = vec3(sin(tv), 0.0, cos(tv));
+    vec4 p;
+    for (uint k = 0u; k < 4u; ++k) p[k] = brdfa_cellProbability(first + k, V, N, X, Y);
+    brdfa_accum[BRDFA_VIEWS * BRDFA_CHUNKS * BRDFA_STRIDE + e] = p;
+#endif
+    return;
+  }
+  uint view = id / BRDFA_CHUNKS, chunk = id % BRDFA_CHUNKS;
   float tv = radians(BRDFA_VIEW_DEG[view]);
   vec3 V = vec3(sin(tv), 0.0, cos(tv));
-  texCoord = vec2(0.5);
   uint base = id * BRDFA_STRIDE;
-  for (uint c = 0u; c < BRDFA_CELLS; ++c) brdfa_accum[base + c] = vec4(0.0);
+  for (uint c = 0u; c < BRDFA_STRIDE; ++c) brdfa_accum[base + c] = vec4(0.0);
+  uint histogram = base + BRDFA_CELLS + 2u;
+  float pdfMismatch = 0.0;
 
   float rejected = 0.0, mismatch = 0.0, albedo = 0.0, albedoSq = 0.0, cosAlbedo = 0.0, cosAlbedoSq = 0.0;
   uvec2 rotation = brdfa_pixelRotation(uvec2(id, 7u));  // chunks see different sample points
@@ -53,6 +112,30 @@ void main() {
       albedo += w;
       albedoSq += w * w;
     }
+#if defined(BRDFA_HAS_PDF)
+    // The chi-square draw, from independent uniform numbers: the test's null distribution is
+    // that of multinomial counts, and the low-discrepancy points above fall far more evenly
+    // (every correct sampler would score p ~ 1, which says nothing).
+    uint counter = (id * BRDFA_CHUNK_SAMPLES + i) * 2u;  // unique per (invocation, sample, axis)
+    vec2 ui = vec2(uvec2(brdfa_hash(counter ^ 0x3c6ef372u), brdfa_hash((counter + 1u) ^ 0x3c6ef372u)) >> 8u) *
+              (1.0 / 16777216.0);                       // 24 bits: exact in float, never 1.0
+    vec3 Li;
+    float pdfi;
+    sampleBRDF(ui, V, N, X, Y, Li, pdfi);
+    if (pdfi > 0.0 && Li.z > 0.0 && !isinf(pdfi)) {    // accepted, as above; the rest are rejected draws
+      float q = pdfBRDF(Li, V, N, X, Y);
+      float d = abs(pdfi - q) / max(pdfi, abs(q));     // pdfi > 0 here: no division by zero
+      if (!(d <= 2.0)) d = 2.0;                        // guard: a NaN or inf pdfBRDF counts as the worst
+      pdfMismatch = max(pdfMismatch, d);
+      float theta = atan(length(Li.xy), Li.z);         // in [0, pi/2) for Li.z > 0; exact near the pole
+      float phii = atan(Li.y, Li.x);                   // -pi..pi
+      // guard (both min): phi = pi, or rounding, would index one past the last row / column
+      uint t2 = min(uint(theta / (0.5 * BRDFA_PI) * float(BRDFA_CHI2_THETA)), BRDFA_CHI2_THETA - 1u);
+      uint p2 = min(uint((phii + BRDFA_PI) / (2.0 * BRDFA_PI) * float(BRDFA_CHI2_PHI)), BRDFA_CHI2_PHI - 1u);
+      uint k2 = t2 * BRDFA_CHI2_PHI + p2;
+      brdfa_accum[histogram + k2 / 4u][k2 % 4u] += 1.0;
+    }
+#endif
     float cosOverPdf;
     vec3 lc = brdfa_sampleCosineHemisphere(u, cosOverPdf);
     float wc = brdfa_largest(BRDF(lc, V, N, X, Y)) * cosOverPdf;
@@ -60,5 +143,5 @@ void main() {
     cosAlbedoSq += wc * wc;
   }
   brdfa_accum[base + BRDFA_CELLS] = vec4(rejected, mismatch, albedo, albedoSq);
-  brdfa_accum[base + BRDFA_CELLS + 1u] = vec4(cosAlbedo, cosAlbedoSq, 0.0, 0.0);
+  brdfa_accum[base + BRDFA_CELLS + 1u] = vec4(cosAlbedo, cosAlbedoSq, pdfMismatch, 0.0);
 }

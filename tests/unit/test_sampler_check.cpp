@@ -2,8 +2,10 @@
 // broken ones fail them, and rendering with them is unbiased and less noisy.
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <iostream>
 #include <sstream>
 
 #include "brdfa/renderer.h"
@@ -43,12 +45,25 @@ TEST_F(Samplers, EveryBuiltinSamplerMatchesItsPdfAndItsBrdf) {
     auto r = renderer_->checkSampler(def);
     ASSERT_TRUE(r.ok()) << entry.path() << ": " << r.error().message;
     EXPECT_TRUE(r->passed()) << entry.path().filename() << ": mismatch " << r->maxValueMismatch << ", cell z "
-                             << r->maxCellZ << " over " << r->cellsTested << " cells, albedo z " << r->maxAlbedoZ;
+                             << r->maxCellZ << " over " << r->cellsTested << " cells, albedo z " << r->maxAlbedoZ
+                             << ", chi2 p " << r->minChi2PValue << " (threshold " << r->chi2Threshold << ") "
+                             << r->chi2Failure << ", pdf mismatch " << r->maxPdfMismatch;
     EXPECT_GT(r->cellsTested, 20u) << entry.path().filename();
+    // Every built-in sampler states its density, so the chi-square test runs and passes.
+    EXPECT_TRUE(r->chi2Run) << entry.path().filename();
+    EXPECT_TRUE(r->chi2Failure.empty()) << entry.path().filename() << ": " << r->chi2Failure;
+    EXPECT_GE(r->minChi2PValue, r->chi2Threshold) << entry.path().filename();
+    EXPECT_LT(r->maxPdfMismatch, 1e-3) << entry.path().filename();
+    std::cout << "[ chi2     ] " << entry.path().filename().string() << ": p";
+    for (double p : r->chi2PValues) std::cout << " " << p;
+    std::cout << " (0, 30, 60, 80 degrees), pdf mismatch " << r->maxPdfMismatch << "\n";
   }
   EXPECT_GE(withSampler, 6);  // lambert, ggx, phong_normalized, blinn_phong_normalized, ward, cook_torrance
 }
 
+// A white Lambert file with a sample section built from pieces: PDF_FUNCTION (a pdfBRDF
+// definition, or nothing), DRAW (r, phi, z from u), PDF_EXPR (the pdf sampleBRDF reports) and
+// VALUE_EXPR (the value it returns).
 const char* kLambertWithSampler = R"(analytic
 ::begin parameters
 color Kd 1 1 1
@@ -58,8 +73,10 @@ const float PI = 3.14159265358979323846;
 vec3 BRDF(vec3 L, vec3 V, vec3 N, vec3 X, vec3 Y) { return Kd / PI; }
 ::end shader
 ::begin sample
+// float pdfBRDF( in a comment is not a definition
+PDF_FUNCTION
 vec3 sampleBRDF(vec2 u, vec3 V, vec3 N, vec3 X, vec3 Y, out vec3 L, out float pdf) {
-    float r = sqrt(u.x), phi = 2.0 * PI * u.y, z = sqrt(max(0.0, 1.0 - u.x));
+    DRAW
     L = X * (r * cos(phi)) + Y * (r * sin(phi)) + N * z;
     pdf = PDF_EXPR;
     return VALUE_EXPR;
@@ -67,11 +84,28 @@ vec3 sampleBRDF(vec2 u, vec3 V, vec3 N, vec3 X, vec3 Y, out vec3 L, out float pd
 ::end sample
 )";
 
-std::string lambertVariant(const std::string& pdf, const std::string& value) {
+const char* kCosineDraw = "float r = sqrt(u.x), phi = 2.0 * PI * u.y, z = sqrt(max(0.0, 1.0 - u.x));";
+const char* kUniformDraw = "float z = 1.0 - u.x, r = sqrt(max(0.0, 1.0 - z * z)), phi = 2.0 * PI * u.y;";
+
+std::string lambertSampler(const std::string& pdfFunction, const std::string& draw, const std::string& pdf,
+                           const std::string& value) {
   std::string s = kLambertWithSampler;
+  s.replace(s.find("PDF_FUNCTION"), 12, pdfFunction);
+  s.replace(s.find("DRAW"), 4, draw);
   s.replace(s.find("PDF_EXPR"), 8, pdf);
   s.replace(s.find("VALUE_EXPR"), 10, value);
   return s;
+}
+
+// Without pdfBRDF: only the cell, albedo and value checks run.
+std::string lambertVariant(const std::string& pdf, const std::string& value, const char* draw = kCosineDraw) {
+  return lambertSampler("", draw, pdf, value);
+}
+
+// With pdfBRDF { return FUNCTION; }, and sampleBRDF returning BRDF().
+std::string lambertWithPdf(const std::string& draw, const std::string& returned, const std::string& function) {
+  return lambertSampler("float pdfBRDF(vec3 L, vec3 V, vec3 N, vec3 X, vec3 Y) { return " + function + "; }", draw,
+                        returned, "BRDF(L, V, N, X, Y)");
 }
 
 TEST_F(Samplers, ACorrectSamplerPasses) {
@@ -98,11 +132,65 @@ TEST_F(Samplers, AValueThatIsNotTheBrdfFails) {
 TEST_F(Samplers, ASamplerThatMissesPartOfTheLobeFails) {
   // Samples only the upper half of the cosine lobe's radius, with the matching density there:
   // every sample is consistent, but the estimate loses the missed directions (biased).
-  auto def = parse(lambertVariant("z / PI * 2.0", "BRDF(L, V, N, X, Y)").replace(
-      std::string(kLambertWithSampler).find("float r = sqrt(u.x)"), 19, "float r = sqrt(0.5 * u.x)"));
-  auto r = renderer_->checkSampler(def);
+  auto r = renderer_->checkSampler(parse(lambertVariant(
+      "z / PI * 2.0", "BRDF(L, V, N, X, Y)",
+      "float r = sqrt(0.5 * u.x), phi = 2.0 * PI * u.y, z = sqrt(max(0.0, 1.0 - 0.5 * u.x));")));
   ASSERT_TRUE(r.ok());
   EXPECT_GT(r->maxAlbedoZ, 10.0);
+  EXPECT_FALSE(r->passed());
+}
+
+TEST_F(Samplers, WithoutPdfBrdfTheChiSquareTestDoesNotRun) {
+  auto r = renderer_->checkSampler(parse(lambertVariant("z / PI", "BRDF(L, V, N, X, Y)")));
+  ASSERT_TRUE(r.ok());
+  EXPECT_FALSE(r->chi2Run);
+  EXPECT_TRUE(r->passed());
+}
+
+TEST_F(Samplers, ACorrectSamplerWithItsPdfPassesTheChiSquareTest) {
+  auto r = renderer_->checkSampler(
+      parse(lambertWithPdf(kCosineDraw, "pdfBRDF(L, V, N, X, Y)", "max(dot(N, L), 0.0) / PI")));
+  ASSERT_TRUE(r.ok()) << r.error().message;
+  EXPECT_TRUE(r->chi2Run);
+  EXPECT_TRUE(r->chi2Failure.empty()) << r->chi2Failure;
+  EXPECT_GE(r->minChi2PValue, r->chi2Threshold);
+  EXPECT_NEAR(r->chi2Threshold, 1.0 - std::pow(0.99, 0.25), 1e-12);  // 0.01, Sidak over 4 views
+  EXPECT_LT(r->maxPdfMismatch, 1e-6);
+  EXPECT_TRUE(r->passed());
+}
+
+TEST_F(Samplers, ASamplerWhoseDrawsDoNotFollowItsPdfFailsTheChiSquareTest) {
+  // Draws uniform directions but claims (and states in pdfBRDF) the cosine density: every
+  // sample is consistent with pdfBRDF, only the histogram of the draws can tell.
+  auto r = renderer_->checkSampler(
+      parse(lambertWithPdf(kUniformDraw, "pdfBRDF(L, V, N, X, Y)", "max(dot(N, L), 0.0) / PI")));
+  ASSERT_TRUE(r.ok()) << r.error().message;
+  EXPECT_TRUE(r->chi2Run);
+  EXPECT_LT(r->maxPdfMismatch, 1e-6);
+  EXPECT_LT(r->minChi2PValue, 1e-12);
+  EXPECT_FALSE(r->chi2Passed());
+  EXPECT_FALSE(r->passed());
+}
+
+TEST_F(Samplers, AReturnedPdfThatIsNotPdfBrdfFails) {
+  // pdfBRDF is right (the chi-square test passes), the pdf sampleBRDF returns is 10% high.
+  auto r = renderer_->checkSampler(parse(lambertWithPdf(kCosineDraw, "1.1 * z / PI", "max(dot(N, L), 0.0) / PI")));
+  ASSERT_TRUE(r.ok()) << r.error().message;
+  EXPECT_TRUE(r->chi2Run);
+  EXPECT_GE(r->minChi2PValue, r->chi2Threshold);
+  EXPECT_NEAR(r->maxPdfMismatch, 0.1 / 1.1, 1e-3);
+  EXPECT_FALSE(r->chi2Passed());
+  EXPECT_FALSE(r->passed());
+}
+
+TEST_F(Samplers, SamplesWherePdfBrdfIsZeroFailTheChiSquareTest) {
+  // pdfBRDF says nothing is drawn with phi < 0 (y < 0); the sampler draws there anyway.
+  auto r = renderer_->checkSampler(parse(
+      lambertWithPdf(kCosineDraw, "z / PI", "(L.z > 0.0 && L.y >= 0.0) ? 2.0 * L.z / PI : 0.0")));
+  ASSERT_TRUE(r.ok()) << r.error().message;
+  EXPECT_TRUE(r->chi2Run);
+  EXPECT_EQ(r->minChi2PValue, 0.0);
+  EXPECT_NE(r->chi2Failure.find("expected count is 0"), std::string::npos) << r->chi2Failure;
   EXPECT_FALSE(r->passed());
 }
 

@@ -118,11 +118,16 @@ struct BrdfCheckReport {
 };
 
 // Checks of a file's sampleBRDF() (issue 3): 65536 samples for each of 4 view directions
-// (0, 30, 60, 80 degrees) at default parameters. A file gives no pdf for arbitrary directions,
-// so the test uses what must hold if the reported pdf is the density of the samples: over 128
-// cells of equal solid angle, the mean of 1_cell / pdf equals the cell's solid angle
-// (z-scores; cells with cos(theta) >= 1/4, see brdf_check.cpp); the importance-sampled albedo E[f cos / pdf] equals a cosine-sampled estimate
+// (0, 30, 60, 80 degrees) at default parameters. Always run, using only what must hold if the
+// reported pdf is the density of the samples: over 128 cells of equal solid angle, the mean of
+// 1_cell / pdf equals the cell's solid angle (z-scores; cells with cos(theta) >= 1/4, see
+// brdf_check.cpp); the importance-sampled albedo E[f cos / pdf] equals a cosine-sampled estimate
 // (a sampler that misses part of the lobe fails this); and the returned value equals BRDF().
+// When the sample section also defines pdfBRDF(L, V, N, X, Y) (the density of sampleBRDF's
+// draws at any L), pbrt-v4's chi-square goodness-of-fit test runs too: per view, the counts of
+// accepted samples in 10 x 20 cells uniform in theta (0..90 degrees) and phi against the counts
+// pdfBRDF predicts (its Simpson integral over each cell times all draws, rejected ones
+// included), small cells pooled; and the pdf each sample returned must equal pdfBRDF there.
 struct SamplerCheckReport {
   uint64_t samples = 0;
   uint64_t rejected = 0;          // pdf = 0, or L below the horizon
@@ -130,8 +135,16 @@ struct SamplerCheckReport {
   uint32_t cellsTested = 0;       // cells with enough samples to test
   double maxCellZ = 0;            // largest |z| of a cell's solid-angle estimate
   double maxAlbedoZ = 0;          // largest |z| of sampled vs cosine albedo over the views
+  bool chi2Run = false;           // the file defines pdfBRDF; the fields below are then set
+  double minChi2PValue = 1;       // smallest p-value over the views (0: a test could not run, see chi2Failure)
+  std::vector<double> chi2PValues;  // per view (0, 30, 60, 80 degrees) when run
+  double chi2Threshold = 0;       // per-view significance: 0.01 with the Sidak correction over the views
+  double maxPdfMismatch = 0;      // max relative |returned pdf - pdfBRDF(L, V)| over accepted samples
+  std::string chi2Failure;        // why a view's test failed outright (a sample where pdfBRDF
+                                  // integrates to 0, a bad expected count); empty otherwise
+  bool chi2Passed() const { return !chi2Run || (minChi2PValue >= chi2Threshold && maxPdfMismatch < 1e-3); }
   bool passed(double zLimit = 5.0) const {
-    return maxValueMismatch < 1e-3 && maxCellZ < zLimit && maxAlbedoZ < zLimit;
+    return maxValueMismatch < 1e-3 && maxCellZ < zLimit && maxAlbedoZ < zLimit && chi2Passed();
   }
 };
 
