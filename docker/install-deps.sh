@@ -8,16 +8,36 @@ set -eu
 PACKAGES="build-essential cmake pkg-config \
 libvulkan-dev mesa-vulkan-drivers glslang-dev glslang-tools \
 libglm-dev libtinyobjloader-dev libcpp-httplib-dev libssl-dev libbrotli-dev zlib1g-dev \
-nlohmann-json3-dev libstb-dev libgtest-dev"
+nlohmann-json3-dev libstb-dev libtinyexr-dev libgtest-dev"
+
+# Wanted but not required: blender-data ships eight CC0 equirectangular EXR worlds that the
+# server offers as environments blender_<name> when present (issue 4). Tried once per machine.
+OPTIONAL="blender-data"
+OPTIONAL_STAMP=/var/lib/brdfa-optional-packages-tried
+
+installed() { dpkg-query -W -f='${Status}' "$1" 2>/dev/null | grep -q "install ok installed"; }
+
+try_optional() {
+  [ "$(id -u)" = "0" ] && [ "${1:-}" != "--print" ] || return 0
+  [ -e "$OPTIONAL_STAMP" ] && return 0
+  for p in $OPTIONAL; do
+    installed "$p" && continue
+    echo "Installing optional: $p"
+    DEBIAN_FRONTEND=noninteractive apt-get install -y -qq --no-install-recommends "$p" ||
+      echo "optional package $p could not be installed; continuing without it" >&2
+  done
+  touch "$OPTIONAL_STAMP" 2>/dev/null || true
+}
 
 missing=""
 for p in $PACKAGES; do
-  if ! dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed"; then
+  if ! installed "$p"; then
     missing="$missing $p"
   fi
 done
 
 if [ -z "$missing" ]; then
+  try_optional "${1:-}"
   exit 0
 fi
 if [ "${1:-}" = "--print" ] || [ "$(id -u)" != "0" ]; then
@@ -31,3 +51,4 @@ export DEBIAN_FRONTEND=noninteractive
 apt-get update -qq
 # shellcheck disable=SC2086
 apt-get install -y -qq --no-install-recommends $missing
+try_optional

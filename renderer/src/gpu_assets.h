@@ -28,6 +28,13 @@ struct GpuEnvironment {
   Image cube;  // RGBA16F, SHADER_READ_ONLY_OPTIMAL
 };
 
+// A texture an object samples as iTexture0..3: RGBA8, sRGB-decoding or linear.
+struct GpuTexture {
+  std::string name;
+  bool srgb = true;
+  Image image;  // SHADER_READ_ONLY_OPTIMAL
+};
+
 // A compute pipeline that owns its VkPipeline.
 class ComputeKernel {
  public:

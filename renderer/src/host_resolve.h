@@ -7,6 +7,8 @@
 #include <cstddef>
 #include <cstdint>
 
+#include "brdfa/scene.h"
+
 namespace brdfa {
 
 struct ErrorSums {
@@ -20,6 +22,7 @@ struct HostResolveInput {
   const float* positions = nullptr; // pixels RGBA, the G-buffer's position plane (w != 0: object)
   size_t pixels = 0;
   float exposureScale = 1;
+  ToneMap toneMap = ToneMap::Clamp;  // applied after exposure, before the sRGB encoding
 };
 
 // Writes rgba8 (sRGB, exposure applied; may be null) and rgba32f (linear mean; may be null);

@@ -205,6 +205,15 @@ Result<std::vector<RenderViewImpl::ObjectState>> RenderViewImpl::buildObjects(co
       return fail(std::move(e));
     }
     o.mesh = mesh.value();
+    for (size_t t = 0; t < so.textures.size() && t < static_cast<size_t>(kMaxTextures); ++t) {
+      auto texture = r_->texture(so.textures[t].name, so.textures[t].srgb);
+      if (!texture) {
+        Error e = texture.takeError();
+        e.field = at + ".textures[" + std::to_string(t) + "]";
+        return fail(std::move(e));
+      }
+      o.textures[t] = texture.value();
+    }
 
     std::vector<uint8_t> packed = o.kernel->params.pack(*so.brdf, so.params);
     auto params = Buffer::create(ctx, packed.size(), VK_BUFFER_USAGE_UNIFORM_BUFFER_BIT, true);
@@ -241,7 +250,7 @@ Result<std::vector<RenderViewImpl::ObjectState>> RenderViewImpl::buildObjects(co
       w[b].pBufferInfo = &infos[b];
     }
     vkUpdateDescriptorSets(ctx.device(), 2, w, 0, nullptr);
-    r_->writeDefaultTextures(o.set);
+    r_->writeTextures(o.set, o.textures);
     out.push_back(std::move(o));
   }
   return out;
@@ -282,12 +291,14 @@ Result<void> RenderViewImpl::setScene(const Scene& scene) {
   for (size_t i = 0; sameShading && i < objects.size(); ++i) {
     sameShading = objects[i].kernel->programHash == objects_[i].kernel->programHash &&
                   objects[i].params.size() == objects_[i].params.size() &&
-                  std::memcmp(objects[i].params.mapped(), objects_[i].params.mapped(), objects[i].params.size()) == 0;
+                  std::memcmp(objects[i].params.mapped(), objects_[i].params.mapped(), objects[i].params.size()) == 0 &&
+                  scene.objects[i].textures == scene_.objects[i].textures;
   }
   const bool geometryChanged = resized || !hasScene_ || !sameGeometry(scene_, scene);
   const bool lightingChanged = !hasScene_ || !sameLighting(scene_, scene);
   const bool restart = geometryChanged || !sameShading;
   const bool displayChanged = !hasScene_ || scene.render.exposure != scene_.render.exposure ||
+                              scene.render.toneMap != scene_.render.toneMap ||
                               scene.render.samplesPerFrame != scene_.render.samplesPerFrame ||
                               scene.render.maxSamples != scene_.render.maxSamples;
 
@@ -335,6 +346,7 @@ ComputePush RenderViewImpl::basePush() const {
   p.frame[0] = width_;
   p.frame[1] = height_;
   p.tone[0] = std::exp2(scene_.render.exposure);
+  p.tone[1] = static_cast<float>(static_cast<int>(scene_.render.toneMap));  // 0 clamp, 1 reinhard, 2 aces
   return p;
 }
 
@@ -421,6 +433,7 @@ HostResolveInput RenderViewImpl::hostResolveInput() const {
   in.positions = static_cast<const float*>(gbuffer_.mapped());
   in.pixels = size_t(width_) * height_;
   in.exposureScale = std::exp2(scene_.render.exposure);
+  in.toneMap = scene_.render.toneMap;
   return in;
 }
 

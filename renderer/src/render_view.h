@@ -29,6 +29,7 @@ class RenderViewImpl final : public RenderView {
   struct ObjectState {
     std::shared_ptr<const ShadeKernel> kernel;
     std::shared_ptr<const GpuMesh> mesh;
+    std::shared_ptr<const GpuTexture> textures[kMaxTextures];  // null: white
     Buffer params;     // std140 BrdfParams
     Buffer transform;  // ObjectUniform
     VkDescriptorSet set = VK_NULL_HANDLE;

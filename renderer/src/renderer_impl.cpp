@@ -6,10 +6,13 @@
 #include <cstdlib>
 #include <cstring>
 #include <filesystem>
+#include <fstream>
+#include <sstream>
 
 #include "brdf_features.h"
 #include "environment_maps.h"
 #include "meshes.h"
+#include "obj_loader.h"
 #include "render_view.h"
 #include "vk_check.h"
 
@@ -91,13 +94,22 @@ Result<void> RendererImpl::init(const RendererOptions& options) {
   return {};
 }
 
-void RendererImpl::writeDefaultTextures(VkDescriptorSet objectSet) const {
-  VkDescriptorImageInfo info{textureSampler_, whiteTexture_.view(), VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL};
-  std::array<VkWriteDescriptorSet, 4> w{};
-  for (uint32_t i = 0; i < 4; ++i)
+void RendererImpl::writeTextures(VkDescriptorSet objectSet,
+                                 const std::shared_ptr<const GpuTexture> (&textures)[kMaxTextures]) const {
+  std::array<VkDescriptorImageInfo, kMaxTextures> info{};
+  std::array<VkWriteDescriptorSet, kMaxTextures> w{};
+  for (uint32_t i = 0; i < kMaxTextures; ++i) {
+    info[i] = {textureSampler_, textures[i] ? textures[i]->image.view() : whiteTexture_.view(),
+               VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL};
     w[i] = {VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET, nullptr, objectSet, 2 + i, 0, 1,
-            VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, &info, nullptr, nullptr};
+            VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, &info[i], nullptr, nullptr};
+  }
   vkUpdateDescriptorSets(ctx_->device(), static_cast<uint32_t>(w.size()), w.data(), 0, nullptr);
+}
+
+void RendererImpl::writeDefaultTextures(VkDescriptorSet objectSet) const {
+  const std::shared_ptr<const GpuTexture> none[kMaxTextures];
+  writeTextures(objectSet, none);
 }
 
 RendererImpl::~RendererImpl() {
@@ -107,6 +119,7 @@ RendererImpl::~RendererImpl() {
   kernelCache_.clear();
   environments_.clear();
   meshes_.clear();
+  textures_.clear();
   resolve_.reset();
   backgroundConstant_.reset();
   backgroundCube_.reset();
@@ -445,30 +458,8 @@ AssembledProgram RendererImpl::assembleCheckProgram(const BrdfDefinition& brdf, 
   return assembleProgram(spec);
 }
 
-Result<std::shared_ptr<const GpuEnvironment>> RendererImpl::environment(const std::string& name) {
-  std::lock_guard<std::mutex> lock(assetMutex_);
-  auto it = environments_.find(name);
-  if (it != environments_.end()) return it->second;
-  auto data = makeBuiltinEnvironment(name);
-  if (!data) return data.takeError();
-  ImageSpec spec;
-  spec.width = spec.height = data->faceSize;
-  spec.layers = 6;
-  spec.cube = true;
-  spec.format = VK_FORMAT_R16G16B16A16_SFLOAT;  // linear filtering is guaranteed for 16F, not 32F
-  spec.usage = VK_IMAGE_USAGE_SAMPLED_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT;
-  auto image = Image::create(*ctx_, spec);
-  if (!image) return image.takeError();
-  BRDFA_TRY(uploadImage(*ctx_, *image, data->texels.data(), data->texels.size() * sizeof(uint16_t)));
-  auto env = std::make_shared<GpuEnvironment>();
-  env->name = name;
-  env->constant = data->constant;
-  env->cube = std::move(image.value());
-  environments_[name] = env;
-  return std::shared_ptr<const GpuEnvironment>(env);
-}
-
 namespace {
+
 Result<Buffer> deviceBufferWith(VkContext& ctx, const void* bytes, VkDeviceSize size, VkBufferUsageFlags usage) {
   auto staging = Buffer::create(ctx, size, VK_BUFFER_USAGE_TRANSFER_SRC_BIT, true);
   if (!staging) return staging.takeError();
@@ -486,45 +477,224 @@ Result<Buffer> deviceBufferWith(VkContext& ctx, const void* bytes, VkDeviceSize 
   BRDFA_TRY(cmd->submitAndWait());
   return buffer;
 }
+
+Result<std::string> readWholeFile(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) return makeError(ErrorCode::NotFound, "asset file is missing: " + path);
+  std::ostringstream text;
+  text << in.rdbuf();
+  if (!in.good() && !in.eof()) return makeError(ErrorCode::Internal, "cannot read asset file " + path);
+  return text.str();
+}
+
+// A registered asset's file failed to decode although it passed inspectAsset when stored
+// (edited or damaged on disk): a scene error naming the asset, not a crash.
+Error assetError(Error e, AssetKind kind, const std::string& name) {
+  e.message = std::string(assetKindName(kind)) + " '" + name + "': " + e.message;
+  return e;
+}
+
+// Looks `name` up in a cache of weak references, dropping the entry when it has expired.
+template <class T>
+std::shared_ptr<const T> lockCached(std::map<std::string, std::weak_ptr<const T>>& cache, const std::string& name) {
+  auto it = cache.find(name);
+  if (it == cache.end()) return nullptr;
+  auto strong = it->second.lock();
+  if (!strong) cache.erase(it);
+  return strong;
+}
+
 }  // namespace
 
-Result<std::shared_ptr<const GpuMesh>> RendererImpl::mesh(const std::string& name) {
+Result<void> RendererImpl::registerAsset(const std::string& name, AssetKind kind, const std::string& path) {
+  if (name.empty()) return makeError(ErrorCode::InvalidArgument, "an asset needs a name");
+  std::vector<std::string> builtins = kind == AssetKind::Mesh      ? builtinMeshNames()
+                                      : kind == AssetKind::Texture ? builtinTextureNames()
+                                                                   : builtinEnvironmentNames();
+  if (std::find(builtins.begin(), builtins.end(), name) != builtins.end())
+    return makeError(ErrorCode::InvalidArgument, "'" + name + "' is a built-in " + assetKindName(kind) + " name");
   std::lock_guard<std::mutex> lock(assetMutex_);
-  auto it = meshes_.find(name);
-  if (it != meshes_.end()) return it->second;
-  auto data = makeBuiltinMesh(name);
-  if (!data) return data.takeError();
+  registered_[{kind, name}] = path;
+  // Later scenes load the new file; views already holding the old one keep it.
+  if (kind == AssetKind::Mesh) uploadedMeshes_.erase(name);
+  if (kind == AssetKind::Environment) uploadedEnvironments_.erase(name);
+  if (kind == AssetKind::Texture) {
+    uploadedTextures_.erase(name + "|srgb");
+    uploadedTextures_.erase(name + "|linear");
+  }
+  return {};
+}
+
+Result<std::string> RendererImpl::registeredPath(AssetKind kind, const std::string& name) const {
+  auto it = registered_.find({kind, name});
+  if (it == registered_.end())
+    return makeError(ErrorCode::NotFound, std::string("unknown ") + assetKindName(kind) + " '" + name + "'");
+  return it->second;
+}
+
+Result<std::shared_ptr<GpuEnvironment>> RendererImpl::uploadEnvironment(const std::string& name,
+                                                                       const EnvironmentData& data) {
+  ImageSpec spec;
+  spec.width = spec.height = data.faceSize;
+  spec.layers = 6;
+  spec.cube = true;
+  spec.format = VK_FORMAT_R16G16B16A16_SFLOAT;  // linear filtering is guaranteed for 16F, not 32F
+  spec.usage = VK_IMAGE_USAGE_SAMPLED_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT;
+  auto image = Image::create(*ctx_, spec);
+  if (!image) return image.takeError();
+  BRDFA_TRY(uploadImage(*ctx_, *image, data.texels.data(), data.texels.size() * sizeof(uint16_t)));
+  auto env = std::make_shared<GpuEnvironment>();
+  env->name = name;
+  env->constant = data.constant;
+  env->cube = std::move(image.value());
+  return env;
+}
+
+Result<std::shared_ptr<const GpuEnvironment>> RendererImpl::environment(const std::string& name) {
+  std::lock_guard<std::mutex> lock(assetMutex_);
+  if (auto it = environments_.find(name); it != environments_.end()) return it->second;
+  if (auto cached = lockCached(uploadedEnvironments_, name)) return cached;
+  auto builtin = makeBuiltinEnvironment(name);
+  if (builtin) {
+    auto env = uploadEnvironment(name, *builtin);
+    if (!env) return env.takeError();
+    environments_[name] = env.value();
+    return std::shared_ptr<const GpuEnvironment>(env.value());
+  }
+  auto path = registeredPath(AssetKind::Environment, name);
+  if (!path) return path.takeError();
+  auto bytes = readWholeFile(*path);
+  if (!bytes) return assetError(bytes.takeError(), AssetKind::Environment, name);
+  auto data = decodeEnvironment(*bytes, AssetLimits{~0ull, ~0ull, ~0ull}, name, nullptr);
+  if (!data) return assetError(data.takeError(), AssetKind::Environment, name);
+  auto env = uploadEnvironment(name, *data);
+  if (!env) return env.takeError();
+  uploadedEnvironments_[name] = env.value();
+  return std::shared_ptr<const GpuEnvironment>(env.value());
+}
+
+Result<std::shared_ptr<GpuMesh>> RendererImpl::uploadMesh(const std::string& name, const MeshData& data) {
+  if (data.vertices.empty() || data.indices.empty())
+    return makeError(ErrorCode::InvalidArgument, "mesh '" + name + "' has no triangles");
   auto gpu = std::make_shared<GpuMesh>();
   gpu->name = name;
-  gpu->vertexCount = static_cast<uint32_t>(data->vertices.size());
+  gpu->vertexCount = static_cast<uint32_t>(data.vertices.size());
   for (int a = 0; a < 3; ++a) {
     gpu->boundsMin[a] = INFINITY;
     gpu->boundsMax[a] = -INFINITY;
   }
-  for (const Vertex& v : data->vertices)
+  for (const Vertex& v : data.vertices)
     for (int a = 0; a < 3; ++a) {
       gpu->boundsMin[a] = std::min(gpu->boundsMin[a], v.position[a]);
       gpu->boundsMax[a] = std::max(gpu->boundsMax[a], v.position[a]);
     }
-  gpu->indexCount = static_cast<uint32_t>(data->indices.size());
-  auto vb = deviceBufferWith(*ctx_, data->vertices.data(), data->vertices.size() * sizeof(Vertex),
+  gpu->indexCount = static_cast<uint32_t>(data.indices.size());
+  auto vb = deviceBufferWith(*ctx_, data.vertices.data(), data.vertices.size() * sizeof(Vertex),
                              VK_BUFFER_USAGE_VERTEX_BUFFER_BIT);
   if (!vb) return vb.takeError();
-  auto ib = deviceBufferWith(*ctx_, data->indices.data(), data->indices.size() * sizeof(uint32_t),
+  auto ib = deviceBufferWith(*ctx_, data.indices.data(), data.indices.size() * sizeof(uint32_t),
                              VK_BUFFER_USAGE_INDEX_BUFFER_BIT);
   if (!ib) return ib.takeError();
   gpu->vertices = std::move(vb.value());
   gpu->indices = std::move(ib.value());
-  meshes_[name] = gpu;
-  return std::shared_ptr<const GpuMesh>(gpu);
+  return gpu;
+}
+
+Result<std::shared_ptr<const GpuMesh>> RendererImpl::mesh(const std::string& name) {
+  std::lock_guard<std::mutex> lock(assetMutex_);
+  if (auto it = meshes_.find(name); it != meshes_.end()) return it->second;
+  if (auto cached = lockCached(uploadedMeshes_, name)) return cached;
+  auto builtin = makeBuiltinMesh(name);
+  if (builtin) {
+    auto gpu = uploadMesh(name, *builtin);
+    if (!gpu) return gpu.takeError();
+    meshes_[name] = gpu.value();
+    return std::shared_ptr<const GpuMesh>(gpu.value());
+  }
+  auto path = registeredPath(AssetKind::Mesh, name);
+  if (!path) return path.takeError();
+  auto bytes = readWholeFile(*path);
+  if (!bytes) return assetError(bytes.takeError(), AssetKind::Mesh, name);
+  auto data = loadObjMesh(*bytes, AssetLimits{~0ull, ~0ull, ~0ull}, nullptr);
+  if (!data) return assetError(data.takeError(), AssetKind::Mesh, name);
+  auto gpu = uploadMesh(name, *data);
+  if (!gpu) return gpu.takeError();
+  uploadedMeshes_[name] = gpu.value();
+  return std::shared_ptr<const GpuMesh>(gpu.value());
+}
+
+Result<std::shared_ptr<GpuTexture>> RendererImpl::uploadTexture(const std::string& name, bool srgb,
+                                                               const TextureData& data) {
+  if (data.width == 0 || data.height == 0 || data.rgba8.size() != size_t(data.width) * data.height * 4)
+    return makeError(ErrorCode::InvalidArgument, "texture '" + name + "' has no pixels");
+  ImageSpec spec;
+  spec.width = data.width;
+  spec.height = data.height;
+  // The sampler decodes sRGB to linear (before filtering, as it should be).
+  spec.format = srgb ? VK_FORMAT_R8G8B8A8_SRGB : VK_FORMAT_R8G8B8A8_UNORM;
+  spec.usage = VK_IMAGE_USAGE_SAMPLED_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT;
+  auto image = Image::create(*ctx_, spec);
+  if (!image) return image.takeError();
+  BRDFA_TRY(uploadImage(*ctx_, *image, data.rgba8.data(), data.rgba8.size()));
+  auto texture = std::make_shared<GpuTexture>();
+  texture->name = name;
+  texture->srgb = srgb;
+  texture->image = std::move(image.value());
+  return texture;
+}
+
+Result<std::shared_ptr<const GpuTexture>> RendererImpl::texture(const std::string& name, bool srgb) {
+  const std::string key = name + (srgb ? "|srgb" : "|linear");
+  std::lock_guard<std::mutex> lock(assetMutex_);
+  if (auto it = textures_.find(key); it != textures_.end()) return it->second;
+  if (auto cached = lockCached(uploadedTextures_, key)) return cached;
+  auto builtin = makeBuiltinTexture(name);
+  if (builtin) {
+    auto gpu = uploadTexture(name, srgb, *builtin);
+    if (!gpu) return gpu.takeError();
+    textures_[key] = gpu.value();
+    return std::shared_ptr<const GpuTexture>(gpu.value());
+  }
+  auto path = registeredPath(AssetKind::Texture, name);
+  if (!path) return path.takeError();
+  auto bytes = readWholeFile(*path);
+  if (!bytes) return assetError(bytes.takeError(), AssetKind::Texture, name);
+  auto data = decodeTexture(*bytes, AssetLimits{~0ull, ~0ull, ~0ull});
+  if (!data) return assetError(data.takeError(), AssetKind::Texture, name);
+  auto gpu = uploadTexture(name, srgb, *data);
+  if (!gpu) return gpu.takeError();
+  uploadedTextures_[key] = gpu.value();
+  return std::shared_ptr<const GpuTexture>(gpu.value());
 }
 
 RendererCounters RendererImpl::counters() const {
   return RendererCounters{glslCompiles_.load(), spirvCacheHits_.load(), spirvDiskHits_.load(), pipelinesCreated_.load()};
 }
 
-std::vector<std::string> RendererImpl::environmentNames() const { return builtinEnvironmentNames(); }
-std::vector<std::string> RendererImpl::meshNames() const { return builtinMeshNames(); }
+namespace {
+std::vector<std::string> withRegistered(std::vector<std::string> names,
+                                        const std::map<std::pair<AssetKind, std::string>, std::string>& registered,
+                                        AssetKind kind) {
+  for (const auto& [key, path] : registered)  // sorted by (kind, name)
+    if (key.first == kind) names.push_back(key.second);
+  return names;
+}
+}  // namespace
+
+std::vector<std::string> RendererImpl::environmentNames() const {
+  std::lock_guard<std::mutex> lock(assetMutex_);
+  return withRegistered(builtinEnvironmentNames(), registered_, AssetKind::Environment);
+}
+
+std::vector<std::string> RendererImpl::meshNames() const {
+  std::lock_guard<std::mutex> lock(assetMutex_);
+  return withRegistered(builtinMeshNames(), registered_, AssetKind::Mesh);
+}
+
+std::vector<std::string> RendererImpl::textureNames() const {
+  std::lock_guard<std::mutex> lock(assetMutex_);
+  return withRegistered(builtinTextureNames(), registered_, AssetKind::Texture);
+}
 
 Result<std::unique_ptr<RenderView>> RendererImpl::createView() {
   auto view = std::make_unique<RenderViewImpl>(shared_from_this());

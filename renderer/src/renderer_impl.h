@@ -11,7 +11,10 @@
 #include <unordered_map>
 
 #include "brdfa/renderer.h"
+#include "environment_maps.h"
 #include "glsl_compiler.h"
+#include "image_decode.h"
+#include "meshes.h"
 #include "gpu_assets.h"
 #include "shader_sources.h"
 #include "spirv_disk_cache.h"
@@ -31,8 +34,10 @@ class RendererImpl final : public Renderer, public std::enable_shared_from_this<
   Result<SamplerCheckReport> checkSampler(const BrdfDefinition& brdf) override;
   Result<int> preloadFromCache(const BrdfDefinition& brdf) override;
   RendererCounters counters() const override;
+  Result<void> registerAsset(const std::string& name, AssetKind kind, const std::string& path) override;
   std::vector<std::string> environmentNames() const override;
   std::vector<std::string> meshNames() const override;
+  std::vector<std::string> textureNames() const override;
 
   // For views.
   VkContext& ctx() { return *ctx_; }
@@ -54,6 +59,9 @@ class RendererImpl final : public Renderer, public std::enable_shared_from_this<
 
   Result<std::shared_ptr<const GpuEnvironment>> environment(const std::string& name);
   Result<std::shared_ptr<const GpuMesh>> mesh(const std::string& name);
+  Result<std::shared_ptr<const GpuTexture>> texture(const std::string& name, bool srgb);
+  // Binds `textures` (null entries: white) to set 1 bindings 2..5 of `objectSet`.
+  void writeTextures(VkDescriptorSet objectSet, const std::shared_ptr<const GpuTexture> (&textures)[kMaxTextures]) const;
   // The shading kernel for `brdf` in this variant; compiled once, then served from the cache.
   Result<std::shared_ptr<const ShadeKernel>> shadeKernel(const BrdfDefinition& brdf, SamplingMode sampling,
                                                          bool constantEnv);
@@ -109,9 +117,20 @@ class RendererImpl final : public Renderer, public std::enable_shared_from_this<
   std::atomic<uint64_t> glslCompiles_{0}, spirvCacheHits_{0}, spirvDiskHits_{0}, pipelinesCreated_{0};
   std::unique_ptr<SpirvDiskCache> diskCache_;
 
-  std::mutex assetMutex_;
+  // Asset caches. Built-ins are kept for the renderer's life; registered (uploaded) assets
+  // only while a view holds them, so large uploads do not pile up in memory.
+  Result<std::string> registeredPath(AssetKind kind, const std::string& name) const;  // assetMutex_ held
+  Result<std::shared_ptr<GpuMesh>> uploadMesh(const std::string& name, const MeshData& data);
+  Result<std::shared_ptr<GpuEnvironment>> uploadEnvironment(const std::string& name, const EnvironmentData& data);
+  Result<std::shared_ptr<GpuTexture>> uploadTexture(const std::string& name, bool srgb, const TextureData& data);
+  mutable std::mutex assetMutex_;
+  std::map<std::pair<AssetKind, std::string>, std::string> registered_;  // (kind, name) -> file path
   std::map<std::string, std::shared_ptr<const GpuEnvironment>> environments_;
   std::map<std::string, std::shared_ptr<const GpuMesh>> meshes_;
+  std::map<std::string, std::shared_ptr<const GpuTexture>> textures_;  // key: name + "|srgb" / "|linear"
+  std::map<std::string, std::weak_ptr<const GpuEnvironment>> uploadedEnvironments_;
+  std::map<std::string, std::weak_ptr<const GpuMesh>> uploadedMeshes_;
+  std::map<std::string, std::weak_ptr<const GpuTexture>> uploadedTextures_;
 };
 
 }  // namespace brdfa

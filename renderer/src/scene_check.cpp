@@ -32,6 +32,23 @@ bool samplingModeFromName(const std::string& name, SamplingMode& mode) {
   return false;
 }
 
+const char* toneMapName(ToneMap toneMap) {
+  switch (toneMap) {
+    case ToneMap::Reinhard: return "reinhard";
+    case ToneMap::Aces: return "aces";
+    default: return "clamp";
+  }
+}
+
+bool toneMapFromName(const std::string& name, ToneMap& toneMap) {
+  for (ToneMap t : {ToneMap::Clamp, ToneMap::Reinhard, ToneMap::Aces})
+    if (name == toneMapName(t)) {
+      toneMap = t;
+      return true;
+    }
+  return false;
+}
+
 Result<void> checkScene(const Scene& s) {
   const RenderSettings& r = s.render;
   if (r.width < kMinImageSize || r.width > kMaxImageSize)
@@ -67,6 +84,7 @@ Result<void> checkScene(const Scene& s) {
     if (!finite3(o.scale)) return invalid(at + ".scale", "must be finite");
     for (float v : o.scale)
       if (std::fabs(v) < 1e-6f || std::fabs(v) > 1e6f) return invalid(at + ".scale", "each factor must be within 1e-6..1e6 in magnitude");
+    if (o.textures.size() > static_cast<size_t>(kMaxTextures)) return invalid(at + ".textures", "at most 4 textures");
     for (const auto& [name, value] : o.params) {
       const std::string field = at + ".params." + name;
       if (!o.brdf->findParam(name))

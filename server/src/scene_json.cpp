@@ -199,6 +199,31 @@ Result<Vec3> readParamValue(const BrdfParam& p, const json& v, const std::string
   return invalid(field, "unsupported parameter type");
 }
 
+// "textures": up to four entries, each a name ("checker") or {"name": .., "srgb": true|false}.
+Result<std::vector<TextureBinding>> readTextures(const json& j, const std::string& field) {
+  if (!j.is_array()) return invalid(field, std::string("expected an array, got ") + typeName(j));
+  if (j.size() > static_cast<size_t>(kMaxTextures)) return invalid(field, "at most 4 textures (iTexture0..3)");
+  std::vector<TextureBinding> out;
+  for (size_t i = 0; i < j.size(); ++i) {
+    const std::string at = field + "[" + std::to_string(i) + "]";
+    TextureBinding t;
+    if (j[i].is_string()) {
+      t.name = j[i].get<std::string>();
+    } else {
+      BRDFA_CHECK(checkObject(j[i], at));
+      BRDFA_CHECK(checkKeys(j[i], at, {"name", "srgb"}));
+      auto name = j[i].find("name");
+      if (name == j[i].end()) return invalid(at + ".name", "required");
+      Result<std::string> n = readString(*name, at + ".name");
+      if (!n) return n.takeError();
+      t.name = n.value();
+      BRDFA_CHECK(optionalField(j[i], "srgb", at, t.srgb, readBool));
+    }
+    out.push_back(std::move(t));
+  }
+  return out;
+}
+
 Result<SceneObject> parseObject(const json& j, const std::string& prefix, const SceneResolver& r) {
   SceneObject obj;
   BRDFA_CHECK(checkObject(j, prefix));
@@ -215,10 +240,9 @@ Result<SceneObject> parseObject(const json& j, const std::string& prefix, const 
   BRDFA_CHECK(optionalField(j, "scale", prefix, obj.scale,
                             [](const json& v, const std::string& f) { return readVec3(v, f, 1e-6, kAbsurd); }));
   if (auto it = j.find("textures"); it != j.end()) {
-    if (!it->is_array()) return invalid(prefix + ".textures", std::string("expected an array, got ") + typeName(*it));
-    if (!it->empty())
-      return makeError(ErrorCode::Unsupported, prefix + ".textures: textures are not supported yet",
-                       prefix + ".textures");
+    Result<std::vector<TextureBinding>> textures = readTextures(*it, prefix + ".textures");
+    if (!textures) return textures.takeError();
+    obj.textures = std::move(textures.value());
   }
   // Type problems are reported before unknown names, so one request gets the 400 first.
   const json* params = nullptr;
@@ -227,6 +251,12 @@ Result<SceneObject> parseObject(const json& j, const std::string& prefix, const 
     params = &*it;
   }
 
+  for (size_t t = 0; t < obj.textures.size(); ++t)
+    if (!contains(r.textures, obj.textures[t].name))
+      return makeError(ErrorCode::NotFound,
+                       prefix + ".textures[" + std::to_string(t) + "]: unknown texture '" + obj.textures[t].name +
+                           "' (known: " + joinNames(r.textures) + ")",
+                       prefix + ".textures[" + std::to_string(t) + "]");
   if (!contains(r.meshes, obj.mesh))
     return makeError(ErrorCode::NotFound,
                      prefix + ".mesh: unknown mesh '" + obj.mesh + "' (known: " + joinNames(r.meshes) + ")",
@@ -264,7 +294,7 @@ Result<SceneObject> parseObject(const json& j, const std::string& prefix, const 
 
 Result<void> parseRender(const json& j, RenderSettings& rs) {
   BRDFA_CHECK(checkObject(j, "render"));
-  BRDFA_CHECK(checkKeys(j, "render", {"width", "height", "samples_per_frame", "max_samples", "sampling", "exposure"}));
+  BRDFA_CHECK(checkKeys(j, "render", {"width", "height", "samples_per_frame", "max_samples", "sampling", "exposure", "tonemap"}));
   auto intIn = [](long long lo, long long hi) {
     return [lo, hi](const json& v, const std::string& f) { return readInt(v, f, lo, hi); };
   };
@@ -280,6 +310,12 @@ Result<void> parseRender(const json& j, RenderSettings& rs) {
   }
   BRDFA_CHECK(optionalField(j, "exposure", "render", rs.exposure,
                             [](const json& v, const std::string& f) { return readFloat(v, f, -40, 40); }));
+  if (auto it = j.find("tonemap"); it != j.end()) {
+    Result<std::string> s = readString(*it, "render.tonemap");
+    if (!s) return s.takeError();
+    if (!toneMapFromName(s.value(), rs.toneMap))
+      return invalid("render.tonemap", "must be \"clamp\", \"reinhard\" or \"aces\", got \"" + s.value() + "\"");
+  }
   return {};
 }
 
@@ -327,13 +363,15 @@ json sceneToJson(const Scene& s) {
         params[p.name] = paramValueToJson(p.type, it == o.params.end() ? p.defaultValue : it->second);
       }
     }
+    json textures = json::array();
+    for (const TextureBinding& t : o.textures) textures.push_back({{"name", t.name}, {"srgb", t.srgb}});
     objects.push_back({{"mesh", o.mesh},
                        {"brdf", o.brdfName},
                        {"params", params},
                        {"translate", vec3ToJson(o.translate)},
                        {"rotate", vec3ToJson(o.rotate)},
                        {"scale", vec3ToJson(o.scale)},
-                       {"textures", json::array()}});
+                       {"textures", textures}});
   }
   return json{
       {"camera",
@@ -353,7 +391,8 @@ json sceneToJson(const Scene& s) {
         {"samples_per_frame", s.render.samplesPerFrame},
         {"max_samples", s.render.maxSamples},
         {"sampling", samplingModeName(s.render.sampling)},
-        {"exposure", floatForJson(s.render.exposure)}}},
+        {"exposure", floatForJson(s.render.exposure)},
+        {"tonemap", toneMapName(s.render.toneMap)}}},
   };
 }
 

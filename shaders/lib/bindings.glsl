@@ -29,7 +29,7 @@ layout(push_constant) uniform BrdfaPush {
   uvec4 target;        // x object id (1-based), y half accumulator (0|1),
                        // z shade: dispatch origin x | y << 16; resolve: write float output,
                        // w first pass after a restart (overwrite instead of add)
-  vec4 tone;           // x exposure scale 2^exposure
+  vec4 tone;           // x exposure scale 2^exposure, y tone map (0 clamp, 1 reinhard, 2 aces)
 } brdfa_pc;
 
 uint brdfa_pixelIndex(uvec2 p) { return p.y * brdfa_pc.frame.x + p.x; }

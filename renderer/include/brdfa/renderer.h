@@ -8,6 +8,7 @@
 #include <string>
 #include <vector>
 
+#include "brdfa/assets.h"
 #include "brdfa/brdf.h"
 #include "brdfa/result.h"
 #include "brdfa/scene.h"
@@ -177,8 +178,17 @@ class Renderer {
 
   virtual RendererCounters counters() const = 0;
 
+  // Makes the asset file at `path` usable in scenes under `name` (a mesh, texture or
+  // environment name, by kind), beside the built-ins. The file should have passed inspectAsset
+  // for `kind`; it is read, decoded and uploaded when a scene first uses it, then kept while
+  // any view uses it. InvalidArgument when `name` is empty or a built-in's name of that kind.
+  // Registering a name again replaces the file for later scenes. Thread-safe.
+  virtual Result<void> registerAsset(const std::string& name, AssetKind kind, const std::string& path) = 0;
+
+  // Built-in names, then registered ones (sorted), of each kind.
   virtual std::vector<std::string> environmentNames() const = 0;
   virtual std::vector<std::string> meshNames() const = 0;
+  virtual std::vector<std::string> textureNames() const = 0;
 };
 
 }  // namespace brdfa

@@ -32,14 +32,34 @@ enum class SamplingMode { Cosine, Uniform, Brdf };
 const char* samplingModeName(SamplingMode mode);  // "cosine" | "uniform" | "brdf"
 bool samplingModeFromName(const std::string& name, SamplingMode& mode);  // false if unknown
 
+// Display mapping of linear radiance L (after exposure, e = L * 2^exposure) before the sRGB
+// encoding of PNG frames; float outputs (PFM, EXR) are never tone mapped.
+//   Clamp:    min(e, 1);
+//   Reinhard: e / (1 + e), per channel (Reinhard et al. 2002, eq. 3);
+//   Aces:     Narkowicz's 2015 fit of the ACES filmic curve, per channel.
+enum class ToneMap { Clamp, Reinhard, Aces };
+const char* toneMapName(ToneMap toneMap);                           // "clamp" | "reinhard" | "aces"
+bool toneMapFromName(const std::string& name, ToneMap& toneMap);    // false if unknown
+
 struct RenderSettings {
   int width = 512;
   int height = 512;
   int samplesPerFrame = 4;
   int maxSamples = 4096;
   SamplingMode sampling = SamplingMode::Cosine;
-  float exposure = 0.0f;  // stops; PNG = sRGB(clamp(L * 2^exposure))
+  float exposure = 0.0f;  // stops; PNG = sRGB(tonemap(L * 2^exposure))
+  ToneMap toneMap = ToneMap::Clamp;
 };
+
+// One texture slot of an object (iTexture0..3 in order). `name` is a built-in texture or an
+// uploaded asset id. sRGB images are decoded to linear values when sampled; linear ones
+// (normal maps, roughness) are read as stored.
+struct TextureBinding {
+  std::string name;
+  bool srgb = true;
+  bool operator==(const TextureBinding& o) const { return name == o.name && srgb == o.srgb; }
+};
+inline constexpr int kMaxTextures = 4;
 
 struct SceneObject {
   std::string mesh = "sphere";
@@ -49,6 +69,7 @@ struct SceneObject {
   Vec3 translate{0, 0, 0};
   Vec3 rotate{0, 0, 0};  // degrees, applied X then Y then Z
   Vec3 scale{1, 1, 1};
+  std::vector<TextureBinding> textures;  // at most kMaxTextures; missing slots read white
 };
 
 struct Scene {

@@ -22,6 +22,7 @@ struct SceneResolver {
   std::shared_ptr<const BrdfDefinition> inlineBrdf;
   std::vector<std::string> environments;
   std::vector<std::string> meshes;
+  std::vector<std::string> textures;
 };
 
 // Defaults for fields the JSON leaves out (the Scene struct's own defaults, plus these).
