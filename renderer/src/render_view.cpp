@@ -65,21 +65,22 @@ Result<void> RenderViewImpl::init() {
   cmd_ = std::move(cmd.value());
 
   // New objects are built before the old ones are released, hence room for two scenes' worth.
-  VkDescriptorPoolSize sizes[3] = {{VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 6},
-                                   {VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, 1 + 8 * kMaxObjects},
+  VkDescriptorPoolSize sizes[3] = {{VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 6 * kMaxJitter},
+                                   {VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, kMaxJitter + 8 * kMaxObjects},
                                    {VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, 4 * kMaxObjects}};
   VkDescriptorPoolCreateInfo pci{VK_STRUCTURE_TYPE_DESCRIPTOR_POOL_CREATE_INFO};
   pci.flags = VK_DESCRIPTOR_POOL_CREATE_FREE_DESCRIPTOR_SET_BIT;
-  pci.maxSets = 1 + 2 * kMaxObjects;
+  pci.maxSets = kMaxJitter + 2 * kMaxObjects;
   pci.poolSizeCount = 3;
   pci.pPoolSizes = sizes;
   BRDFA_VK_TRY(vkCreateDescriptorPool(ctx.device(), &pci, nullptr, &pool_));
-  VkDescriptorSetLayout layout = r_->viewSetLayout();
+  VkDescriptorSetLayout layouts[kMaxJitter];
+  for (VkDescriptorSetLayout& l : layouts) l = r_->viewSetLayout();
   VkDescriptorSetAllocateInfo ai{VK_STRUCTURE_TYPE_DESCRIPTOR_SET_ALLOCATE_INFO};
   ai.descriptorPool = pool_;
-  ai.descriptorSetCount = 1;
-  ai.pSetLayouts = &layout;
-  BRDFA_VK_TRY(vkAllocateDescriptorSets(ctx.device(), &ai, &viewSet_));
+  ai.descriptorSetCount = kMaxJitter;
+  ai.pSetLayouts = layouts;
+  BRDFA_VK_TRY(vkAllocateDescriptorSets(ctx.device(), &ai, viewSets_));
 
   auto counters = Buffer::create(ctx, 16, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT, true);
   if (!counters) return counters.takeError();
@@ -131,11 +132,17 @@ Result<void> RenderViewImpl::resize(uint32_t width, uint32_t height) {
 
   const VkDeviceSize pixels = VkDeviceSize(width) * height;
   const VkBufferUsageFlags storage = VK_BUFFER_USAGE_STORAGE_BUFFER_BIT;
+  // Four jittered slices cost 4 x 48 bytes per pixel (50 MB at 512^2); above 1024^2 pixels the
+  // memory is not worth it and the image is not anti-aliased (its pixels are small anyway).
+  jitterCount_ = pixels <= VkDeviceSize(1024) * 1024 ? kMaxJitter : 1;
+  const VkDeviceSize align = std::max<VkDeviceSize>(ctx.limits().minStorageBufferOffsetAlignment, 16);
+  sliceStride_ = (pixels * 3 * 16 + align - 1) / align * align;
+  slicesReady_ = 0;
   struct Want { Buffer* buffer; VkDeviceSize size; VkBufferUsageFlags usage; bool host; };
   // With the host resolve, the host reads the G-buffer and accumulators in place.
   const bool host = r_->hostResolve();
   const Want wants[5] = {
-      {&gbuffer_, pixels * 3 * 16, storage | VK_BUFFER_USAGE_TRANSFER_DST_BIT, host},
+      {&gbuffer_, sliceStride_ * jitterCount_, storage | VK_BUFFER_USAGE_TRANSFER_DST_BIT, host},
       {&accum_, pixels * 2 * 16, storage | VK_BUFFER_USAGE_TRANSFER_DST_BIT, host},
       {&outRgba8_, pixels * 4, storage, true},
       {&outFloat_, pixels * 16, storage, true},
@@ -154,23 +161,29 @@ void RenderViewImpl::writeViewDescriptors() {
   VkDescriptorImageInfo env{r_->environmentSampler(), env_->cube.view(), VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL};
   const std::pair<uint32_t, const Buffer*> buffers[6] = {{0, &gbuffer_},  {3, &accum_},    {4, &counters_},
                                                          {6, &outRgba8_}, {7, &outFloat_}, {8, &partials_}};
-  VkDescriptorBufferInfo infos[6];
-  VkWriteDescriptorSet w[7] = {};
-  for (uint32_t i = 0; i < 7; ++i) {
-    w[i].sType = VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET;
-    w[i].dstSet = viewSet_;
-    w[i].descriptorCount = 1;
+  const VkDeviceSize sliceBytes = VkDeviceSize(width_) * height_ * 3 * 16;
+  // Every set is written (unused slices alias slice 0) so that no set is ever left invalid.
+  for (uint32_t slice = 0; slice < kMaxJitter; ++slice) {
+    VkDescriptorBufferInfo infos[6];
+    VkWriteDescriptorSet w[7] = {};
+    for (uint32_t i = 0; i < 7; ++i) {
+      w[i].sType = VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET;
+      w[i].dstSet = viewSets_[slice];
+      w[i].descriptorCount = 1;
+    }
+    for (uint32_t i = 0; i < 6; ++i) {
+      infos[i] = {buffers[i].second->handle(), 0, VK_WHOLE_SIZE};
+      w[i].dstBinding = buffers[i].first;
+      w[i].descriptorType = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER;
+      w[i].pBufferInfo = &infos[i];
+    }
+    infos[0].offset = (slice < jitterCount_ ? slice : 0) * sliceStride_;
+    infos[0].range = sliceBytes;
+    w[6].dstBinding = 5;
+    w[6].descriptorType = VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER;
+    w[6].pImageInfo = &env;
+    vkUpdateDescriptorSets(r_->ctx().device(), 7, w, 0, nullptr);
   }
-  for (uint32_t i = 0; i < 6; ++i) {
-    infos[i] = {buffers[i].second->handle(), 0, VK_WHOLE_SIZE};
-    w[i].dstBinding = buffers[i].first;
-    w[i].descriptorType = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER;
-    w[i].pBufferInfo = &infos[i];
-  }
-  w[6].dstBinding = 5;
-  w[6].descriptorType = VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER;
-  w[6].pImageInfo = &env;
-  vkUpdateDescriptorSets(r_->ctx().device(), 7, w, 0, nullptr);
 }
 
 void RenderViewImpl::releaseObjects(std::vector<ObjectState>& objects) {
@@ -310,7 +323,9 @@ Result<void> RenderViewImpl::setScene(const Scene& scene) {
   objects_ = std::move(objects);
   scene_ = scene;
   hasScene_ = true;
-  if (geometryChanged) gbufferPending_ = true;
+  if (geometryChanged) slicesReady_ = 0;
+  coverRect_ = PixelRect{};
+  for (const ObjectState& o : objects_) coverRect_ = unionRect(coverRect_, o.pixels);
   // A new camera, geometry or environment changes coverage or background: clear everything and
   // redraw the background. A new BRDF or parameters keep both: the first pass overwrites the
   // object pixels instead (see the shade kernel), which is cheaper.
@@ -350,57 +365,92 @@ ComputePush RenderViewImpl::basePush() const {
   return p;
 }
 
-void RenderViewImpl::recordPending(VkCommandBuffer cb) {
-  if (gbufferPending_) {
-    VkClearValue clears[4] = {};
-    clears[3].depthStencil = {1.0f, 0};
-    VkRenderPassBeginInfo rbi{VK_STRUCTURE_TYPE_RENDER_PASS_BEGIN_INFO};
-    rbi.renderPass = r_->gbufferPass();
-    rbi.framebuffer = framebuffer_;
-    rbi.renderArea = {{0, 0}, {width_, height_}};
-    rbi.clearValueCount = 4;
-    rbi.pClearValues = clears;
-    vkCmdBeginRenderPass(cb, &rbi, VK_SUBPASS_CONTENTS_INLINE);
-    VkViewport vp{0, 0, static_cast<float>(width_), static_cast<float>(height_), 0, 1};
-    VkRect2D scissor{{0, 0}, {width_, height_}};
-    vkCmdSetViewport(cb, 0, 1, &vp);
-    vkCmdSetScissor(cb, 0, 1, &scissor);
-    vkCmdBindPipeline(cb, VK_PIPELINE_BIND_POINT_GRAPHICS, r_->gbufferPipeline());
-    glm::mat4 viewProj = cameraFrame(scene_.camera, width_, height_).viewProj;
-    vkCmdPushConstants(cb, r_->rasterLayout(), VK_SHADER_STAGE_VERTEX_BIT, 0, 64, glm::value_ptr(viewProj));
-    for (const ObjectState& o : objects_) {
-      vkCmdBindDescriptorSets(cb, VK_PIPELINE_BIND_POINT_GRAPHICS, r_->rasterLayout(), 1, 1, &o.set, 0, nullptr);
-      VkBuffer vb = o.mesh->vertices.handle();
-      VkDeviceSize offset = 0;
-      vkCmdBindVertexBuffers(cb, 0, 1, &vb, &offset);
-      vkCmdBindIndexBuffer(cb, o.mesh->indices.handle(), 0, VK_INDEX_TYPE_UINT32);
-      vkCmdDrawIndexed(cb, o.mesh->indexCount, 1, 0, 0, 0);
-    }
-    vkCmdEndRenderPass(cb);
-    // Copy the targets into the three planes of the G-buffer storage buffer.
-    const VkDeviceSize plane = VkDeviceSize(width_) * height_ * 16;
-    const Image* targets[3] = {&gPosition_, &gNormal_, &gTangent_};
-    for (int i = 0; i < 3; ++i) {
-      VkBufferImageCopy region{};
-      region.bufferOffset = plane * i;
-      region.imageSubresource = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 0, 1};
-      region.imageExtent = {width_, height_, 1};
-      vkCmdCopyImageToBuffer(cb, targets[i]->handle(), VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL, gbuffer_.handle(), 1, &region);
-    }
+uint32_t RenderViewImpl::sliceForPass(uint64_t pass) const {
+  // Passes alternate between the half accumulators (pass & 1); each half must see every slice
+  // equally often, or the halves would differ at edges by more than noise and rel_error would
+  // never fall. Even passes take slices 0, 1, 2, 3, odd ones 2, 3, 0, 1: the first four passes
+  // touch all four slices, and every eight passes give each half each slice once.
+  const uint64_t j = jitterCount_;
+  return static_cast<uint32_t>(((pass >> 1) + (pass & 1) * (j / 2)) % j);
+}
+
+void RenderViewImpl::recordRaster(VkCommandBuffer cb, uint32_t slice) {
+  VkClearValue clears[4] = {};
+  clears[3].depthStencil = {1.0f, 0};
+  VkRenderPassBeginInfo rbi{VK_STRUCTURE_TYPE_RENDER_PASS_BEGIN_INFO};
+  rbi.renderPass = r_->gbufferPass();
+  rbi.framebuffer = framebuffer_;
+  rbi.renderArea = {{0, 0}, {width_, height_}};
+  rbi.clearValueCount = 4;
+  rbi.pClearValues = clears;
+  vkCmdBeginRenderPass(cb, &rbi, VK_SUBPASS_CONTENTS_INLINE);
+  VkViewport vp{0, 0, static_cast<float>(width_), static_cast<float>(height_), 0, 1};
+  VkRect2D scissor{{0, 0}, {width_, height_}};
+  vkCmdSetViewport(cb, 0, 1, &vp);
+  vkCmdSetScissor(cb, 0, 1, &scissor);
+  vkCmdBindPipeline(cb, VK_PIPELINE_BIND_POINT_GRAPHICS, r_->gbufferPipeline());
+  // Moving the geometry by -offset samples it at pixel centre + offset (the background kernel
+  // looks through the same point).
+  glm::mat4 viewProj = jitteredViewProj(cameraFrame(scene_.camera, width_, height_).viewProj,
+                                        -jitterOffset(slice, jitterCount_), width_, height_);
+  vkCmdPushConstants(cb, r_->rasterLayout(), VK_SHADER_STAGE_VERTEX_BIT, 0, 64, glm::value_ptr(viewProj));
+  for (const ObjectState& o : objects_) {
+    vkCmdBindDescriptorSets(cb, VK_PIPELINE_BIND_POINT_GRAPHICS, r_->rasterLayout(), 1, 1, &o.set, 0, nullptr);
+    VkBuffer vb = o.mesh->vertices.handle();
+    VkDeviceSize offset = 0;
+    vkCmdBindVertexBuffers(cb, 0, 1, &vb, &offset);
+    vkCmdBindIndexBuffer(cb, o.mesh->indices.handle(), 0, VK_INDEX_TYPE_UINT32);
+    vkCmdDrawIndexed(cb, o.mesh->indexCount, 1, 0, 0, 0);
   }
+  vkCmdEndRenderPass(cb);
+  // Copy the targets into the three planes of this slice of the G-buffer storage buffer.
+  const VkDeviceSize plane = VkDeviceSize(width_) * height_ * 16;
+  const Image* targets[3] = {&gPosition_, &gNormal_, &gTangent_};
+  for (int i = 0; i < 3; ++i) {
+    VkBufferImageCopy region{};
+    region.bufferOffset = sliceStride_ * slice + plane * i;
+    region.imageSubresource = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 0, 1};
+    region.imageExtent = {width_, height_, 1};
+    vkCmdCopyImageToBuffer(cb, targets[i]->handle(), VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL, gbuffer_.handle(), 1, &region);
+  }
+  slicesReady_ |= 1u << slice;
+}
+
+void RenderViewImpl::recordBackground(VkCommandBuffer cb, const PixelRect& rect, uint32_t slice, uint32_t count,
+                                      uint32_t half, bool firstPass) {
+  if (rect.width == 0 || rect.height == 0) return;
+  ComputePush push = basePush();
+  const bool visible = scene_.environment.visible;
+  // A hidden environment still has samples where an edge pixel misses the object (radiance 0,
+  // but they count): the constant kernel at intensity 0 adds them without any lookup.
+  if (!visible) push.env[0] = 0.0f;
+  const glm::vec2 jitter = count == 0 ? glm::vec2(0.0f) : jitterOffset(slice, jitterCount_);
+  push.tone[2] = jitter.x;
+  push.tone[3] = jitter.y;
+  push.frame[3] = count;  // 0: the once-per-restart write
+  push.target[1] = half;
+  push.target[2] = rect.x | (rect.y << 16);
+  push.target[3] = firstPass ? 1u : 0u;
+  vkCmdBindPipeline(cb, VK_PIPELINE_BIND_POINT_COMPUTE, r_->backgroundPipeline(env_->constant || !visible));
+  vkCmdBindDescriptorSets(cb, VK_PIPELINE_BIND_POINT_COMPUTE, r_->computeLayout(), 0, 1, &viewSets_[slice], 0, nullptr);
+  vkCmdPushConstants(cb, r_->computeLayout(), VK_SHADER_STAGE_COMPUTE_BIT, 0, sizeof(push), &push);
+  vkCmdDispatch(cb, groups(rect.width, kShadeGroup), groups(rect.height, kShadeGroup), 1);
+}
+
+void RenderViewImpl::recordPending(VkCommandBuffer cb, uint32_t slice) {
+  // Slice 0 carries the coverage the resolve and the once-per-restart background use.
+  const bool raster = (slicesReady_ & 1u) == 0 || (slicesReady_ & (1u << slice)) == 0;
+  if ((slicesReady_ & 1u) == 0) recordRaster(cb, 0);
+  if ((slicesReady_ & (1u << slice)) == 0) recordRaster(cb, slice);
   const bool firstPass = stats_.passes == 0;
   if (clearPending_) vkCmdFillBuffer(cb, accum_.handle(), 0, VK_WHOLE_SIZE, 0);
   if (firstPass) vkCmdFillBuffer(cb, counters_.handle(), 0, VK_WHOLE_SIZE, 0);
-  if (gbufferPending_ || clearPending_ || firstPass)
+  if (raster || clearPending_ || firstPass)
     memoryBarrier(cb, VK_PIPELINE_STAGE_TRANSFER_BIT, VK_ACCESS_TRANSFER_WRITE_BIT,
                   VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_ACCESS_SHADER_READ_BIT | VK_ACCESS_SHADER_WRITE_BIT);
   if (clearPending_ && scene_.environment.visible) {
-    // The background is deterministic: written once per restart, not every pass.
-    ComputePush push = basePush();
-    vkCmdBindPipeline(cb, VK_PIPELINE_BIND_POINT_COMPUTE, r_->backgroundPipeline(env_->constant));
-    vkCmdBindDescriptorSets(cb, VK_PIPELINE_BIND_POINT_COMPUTE, r_->computeLayout(), 0, 1, &viewSet_, 0, nullptr);
-    vkCmdPushConstants(cb, r_->computeLayout(), VK_SHADER_STAGE_COMPUTE_BIT, 0, sizeof(push), &push);
-    vkCmdDispatch(cb, groups(width_, kShadeGroup), groups(height_, kShadeGroup), 1);
+    // Deterministic outside the objects' bounds: written once per restart, not every pass.
+    recordBackground(cb, PixelRect{0, 0, width_, height_}, 0, 0, 0, false);
     memoryBarrier(cb, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_ACCESS_SHADER_WRITE_BIT,
                   VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_ACCESS_SHADER_READ_BIT | VK_ACCESS_SHADER_WRITE_BIT);
   }
@@ -410,7 +460,7 @@ void RenderViewImpl::recordResolve(VkCommandBuffer cb, bool linear) {
   ComputePush push = basePush();
   push.target[2] = linear ? 1u : 0u;
   vkCmdBindPipeline(cb, VK_PIPELINE_BIND_POINT_COMPUTE, r_->resolvePipeline());
-  vkCmdBindDescriptorSets(cb, VK_PIPELINE_BIND_POINT_COMPUTE, r_->computeLayout(), 0, 1, &viewSet_, 0, nullptr);
+  vkCmdBindDescriptorSets(cb, VK_PIPELINE_BIND_POINT_COMPUTE, r_->computeLayout(), 0, 1, &viewSets_[0], 0, nullptr);
   vkCmdPushConstants(cb, r_->computeLayout(), VK_SHADER_STAGE_COMPUTE_BIT, 0, sizeof(push), &push);
   vkCmdDispatch(cb, groups(width_, kResolveGroup), groups(height_, kResolveGroup), 1);
 }
@@ -463,7 +513,8 @@ Result<FrameStats> RenderViewImpl::renderPass() {
   auto begun = cmd_.begin();
   if (!begun) return begun.takeError();
   VkCommandBuffer cb = *begun;
-  recordPending(cb);
+  const uint32_t slice = sliceForPass(stats_.passes);
+  recordPending(cb, slice);
 
   ComputePush push = basePush();
   push.frame[2] = static_cast<uint32_t>(stats_.spp);  // the sequence continues across passes
@@ -471,7 +522,7 @@ Result<FrameStats> RenderViewImpl::renderPass() {
   push.target[1] = static_cast<uint32_t>(stats_.passes & 1u);  // alternate half accumulators
   push.target[3] = stats_.passes == 0 ? 1u : 0u;                // first pass: overwrite, not add
   const VkPipelineLayout layout = r_->computeLayout();
-  vkCmdBindDescriptorSets(cb, VK_PIPELINE_BIND_POINT_COMPUTE, layout, 0, 1, &viewSet_, 0, nullptr);
+  vkCmdBindDescriptorSets(cb, VK_PIPELINE_BIND_POINT_COMPUTE, layout, 0, 1, &viewSets_[slice], 0, nullptr);
   // Objects cover disjoint pixels, so their dispatches need no barrier between them. Each runs
   // over its screen bounds only: every pixel visited costs G-buffer loads even when it is not
   // the object's.
@@ -485,6 +536,11 @@ Result<FrameStats> RenderViewImpl::renderPass() {
     vkCmdPushConstants(cb, layout, VK_SHADER_STAGE_COMPUTE_BIT, 0, sizeof(push), &push);
     vkCmdDispatch(cb, groups(rect.width, kShadeGroup), groups(rect.height, kShadeGroup), 1);
   }
+  // Inside the objects' bounds a pixel may be background in this slice and covered in another
+  // (an edge): its background samples are taken with the pass, so the pixel is the average over
+  // its sub-pixel positions. With one slice nothing changes from pass to pass there.
+  if (jitterCount_ > 1)
+    recordBackground(cb, coverRect_, slice, count, push.target[1], stats_.passes == 0);
   // Refresh the error estimate in the same submission when it is due (and a second half exists).
   const bool refreshError = stats_.passes >= 1 &&
                             (sinceErrorMs_ >= kErrorRefreshMs || stats_.spp + count >= maxSamples);
@@ -496,7 +552,7 @@ Result<FrameStats> RenderViewImpl::renderPass() {
   memoryBarrier(cb, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_ACCESS_SHADER_WRITE_BIT,
                 VK_PIPELINE_STAGE_HOST_BIT, VK_ACCESS_HOST_READ_BIT);
   BRDFA_TRY(cmd_.submitAndWait());
-  gbufferPending_ = clearPending_ = false;
+  clearPending_ = false;
 
   const double ms = msSince(t0);
   stats_.spp += count;
@@ -523,17 +579,17 @@ Result<Frame> RenderViewImpl::readFrame(bool linear) {
   // Before the first pass of a restart the accumulators may still hold the previous scene's
   // object pixels (a parameter change does not clear them): clear now.
   if (stats_.passes == 0) clearPending_ = true;
-  if (!host || gbufferPending_ || clearPending_) {
+  if (!host || (slicesReady_ & 1u) == 0 || clearPending_) {
     auto begun = cmd_.begin();
     if (!begun) return begun.takeError();
     VkCommandBuffer cb = *begun;
-    recordPending(cb);
+    recordPending(cb, 0);
     if (!host) recordResolve(cb, linear);
     memoryBarrier(cb, VK_PIPELINE_STAGE_TRANSFER_BIT | VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT,
                   VK_ACCESS_TRANSFER_WRITE_BIT | VK_ACCESS_SHADER_WRITE_BIT, VK_PIPELINE_STAGE_HOST_BIT,
                   VK_ACCESS_HOST_READ_BIT);
     BRDFA_TRY(cmd_.submitAndWait());
-    gbufferPending_ = clearPending_ = false;
+    clearPending_ = false;
   }
 
   Frame frame;

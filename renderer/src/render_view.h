@@ -40,9 +40,14 @@ class RenderViewImpl final : public RenderView {
   void writeViewDescriptors();
   Result<std::vector<ObjectState>> buildObjects(const Scene& scene);
   void releaseObjects(std::vector<ObjectState>& objects);
-  // Records what a scene change left pending: the raster pass and G-buffer copy; clearing the
-  // accumulators and writing the background.
-  void recordPending(VkCommandBuffer cb);
+  // Records what a scene change left pending: the raster pass of G-buffer slice 0 and of
+  // `slice` into their G-buffer planes; clearing the accumulators and writing the background.
+  void recordPending(VkCommandBuffer cb, uint32_t slice);
+  void recordRaster(VkCommandBuffer cb, uint32_t slice);
+  // The background where no object can be (outside every object's screen bounds) is written
+  // once per restart; inside those bounds it is sampled each pass with that pass's jitter.
+  void recordBackground(VkCommandBuffer cb, const PixelRect& rect, uint32_t slice, uint32_t count, uint32_t half,
+                        bool firstPass);
   void recordResolve(VkCommandBuffer cb, bool linear);
   ErrorSums deviceErrorSums() const;  // from the resolve kernel's partial sums
   HostResolveInput hostResolveInput() const;
@@ -55,7 +60,16 @@ class RenderViewImpl final : public RenderView {
   mutable std::mutex mutex_;
   CommandContext cmd_;
   VkDescriptorPool pool_ = VK_NULL_HANDLE;
-  VkDescriptorSet viewSet_ = VK_NULL_HANDLE;
+  // Anti-aliasing: the visibility is rasterized at kMaxJitter sub-pixel offsets into as many
+  // G-buffer slices (lazily, by the first passes after a geometry change), and pass p shades
+  // slice sliceForPass(p). One view descriptor set per slice: binding 0 is that slice.
+  static constexpr uint32_t kMaxJitter = 4;
+  uint32_t jitterCount_ = 1;       // slices in use: kMaxJitter, or 1 for images above 1024^2 pixels
+  VkDeviceSize sliceStride_ = 0;   // bytes from one slice to the next (offset-aligned)
+  uint32_t slicesReady_ = 0;       // bit s: slice s holds the current geometry
+  uint32_t sliceForPass(uint64_t pass) const;
+  VkDescriptorSet viewSets_[kMaxJitter] = {};
+  PixelRect coverRect_;            // union of the objects' screen bounds
   VkFramebuffer framebuffer_ = VK_NULL_HANDLE;
   Image gPosition_, gNormal_, gTangent_, depth_;
   Buffer gbuffer_, accum_, counters_, outRgba8_, outFloat_, partials_;
@@ -65,7 +79,6 @@ class RenderViewImpl final : public RenderView {
   Scene scene_;
   std::shared_ptr<const GpuEnvironment> env_;
   std::vector<ObjectState> objects_;
-  bool gbufferPending_ = true;
   bool clearPending_ = true;
   double sinceErrorMs_ = 0;  // pass time since rel_error was last refreshed
   FrameStats stats_;

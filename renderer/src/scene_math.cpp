@@ -57,4 +57,29 @@ PixelRect screenBounds(const glm::mat4& viewProj, const glm::mat4& model, const 
                    static_cast<uint32_t>(y1 - y0)};
 }
 
+PixelRect unionRect(const PixelRect& a, const PixelRect& b) {
+  if (a.width == 0 || a.height == 0) return b;
+  if (b.width == 0 || b.height == 0) return a;
+  const uint32_t x0 = std::min(a.x, b.x), y0 = std::min(a.y, b.y);
+  const uint32_t x1 = std::max(a.x + a.width, b.x + b.width), y1 = std::max(a.y + a.height, b.y + b.height);
+  return PixelRect{x0, y0, x1 - x0, y1 - y0};
+}
+
+glm::vec2 jitterOffset(uint32_t slice, uint32_t count) {
+  if (count <= 1) return glm::vec2(0.0f);
+  // Rotated-grid supersampling: four points whose x and y projections are all distinct, which
+  // resolves near-horizontal and near-vertical edges into 4 levels instead of 2.
+  static const glm::vec2 kRotatedGrid[4] = {{0.125f, 0.375f}, {0.375f, -0.125f}, {-0.125f, -0.375f}, {-0.375f, 0.125f}};
+  return kRotatedGrid[slice % 4];
+}
+
+glm::mat4 jitteredViewProj(const glm::mat4& viewProj, glm::vec2 offset, uint32_t width, uint32_t height) {
+  // x_ndc += 2 dx / width  <=>  x_clip += (2 dx / width) w_clip: a translation applied after the
+  // projection (its w column scales with w_clip).
+  glm::mat4 shift(1.0f);
+  shift[3][0] = 2.0f * offset.x / static_cast<float>(width);
+  shift[3][1] = 2.0f * offset.y / static_cast<float>(height);
+  return shift * viewProj;
+}
+
 }  // namespace brdfa

@@ -27,6 +27,16 @@ glm::mat4 modelMatrix(const SceneObject& object);
 struct PixelRect {
   uint32_t x = 0, y = 0, width = 0, height = 0;
 };
+// The smallest rectangle holding both (an empty rectangle adds nothing).
+PixelRect unionRect(const PixelRect& a, const PixelRect& b);
+
+// Sub-pixel offsets (in pixels, within +-0.5) of the anti-aliasing slices: a rotated grid of
+// four (RGSS), or the pixel centre when `count` is 1.
+glm::vec2 jitterOffset(uint32_t slice, uint32_t count);
+
+// `viewProj` moved on screen by `offset` pixels (a clip-space translation proportional to w).
+glm::mat4 jitteredViewProj(const glm::mat4& viewProj, glm::vec2 offset, uint32_t width, uint32_t height);
+
 PixelRect screenBounds(const glm::mat4& viewProj, const glm::mat4& model, const float boundsMin[3],
                        const float boundsMax[3], uint32_t width, uint32_t height);
 

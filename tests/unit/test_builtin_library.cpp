@@ -64,7 +64,7 @@ class BuiltinLibrary : public ::testing::Test {
     s.environment.name = "furnace";
     s.environment.visible = false;
     s.render.width = s.render.height = size;
-    s.render.samplesPerFrame = spp;
+    s.render.samplesPerFrame = std::min(spp, kMaxSamplesPerFrame);
     s.render.maxSamples = spp;
     SceneObject o;
     o.brdf = std::move(brdf);
@@ -177,7 +177,11 @@ TEST_F(BuiltinLibrary, EnergyConservingModelsReflectAtMostOne) {
     std::string settings;
     for (const auto& [k, v] : c.params) settings += " " + k + "=" + std::to_string(v[0]);
     SCOPED_TRACE(std::string(c.name) + settings);
-    Frame f = furnace(load(c.name), c.params, 32, 1024);
+    // A lobe as narrow as exponent 1000 is hit by about one cosine sample in 500: 16x the
+    // samples keep its estimate's noise (~7% at 1024 spp) well below the 1% margin.
+    bool narrow = false;
+    for (const auto& [k, v] : c.params) narrow = narrow || v[0] >= 1000.0f;
+    Frame f = furnace(load(c.name), c.params, 32, narrow ? 16384 : 1024);
     EXPECT_EQ(f.stats.nanSamples, 0u);
     const double m = centreMean(f);
     EXPECT_LE(m, 1.01);
