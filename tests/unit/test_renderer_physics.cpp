@@ -1,7 +1,9 @@
 // Physics and behaviour of the renderer on the real Vulkan device (lavapipe here).
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <fstream>
 #include <sstream>
 
@@ -203,6 +205,92 @@ TEST_F(RendererPhysics, LegacyRenderIsThePlainAverageOverTheHemisphere) {
     ASSERT_GT(px.size(), 300u) << c.body;
     EXPECT_NEAR(mean(px), c.expected, c.tolerance) << c.body;
   }
+}
+
+// The sun's highlight on a sphere in image space: intensity-weighted centroid, and the
+// principal axis (degrees, image x right, y down, modulo 180) and elongation (ratio of the
+// standard deviations along and across it) of the pixels above 10% of the brightest.
+struct Highlight {
+  double cx = 0, cy = 0, angle = 0, elongation = 0;
+};
+
+Highlight highlightOf(const Frame& f) {
+  float peak = 0;
+  for (int i = 0; i < f.width * f.height; ++i) peak = std::max(peak, f.rgba32f[4 * i + 1]);
+  double w = 0, sx = 0, sy = 0, sxx = 0, syy = 0, sxy = 0;
+  for (int y = 0; y < f.height; ++y)
+    for (int x = 0; x < f.width; ++x) {
+      const double v = f.rgba32f[4 * (y * f.width + x) + 1];
+      if (v < 0.1 * peak) continue;
+      w += v;
+      sx += v * x;
+      sy += v * y;
+      sxx += v * x * x;
+      syy += v * y * y;
+      sxy += v * x * y;
+    }
+  Highlight h;
+  h.cx = sx / w;
+  h.cy = sy / w;
+  const double cxx = sxx / w - h.cx * h.cx, cyy = syy / w - h.cy * h.cy, cxy = sxy / w - h.cx * h.cy;
+  h.angle = 0.5 * std::atan2(2 * cxy, cxx - cyy) * 180.0 / 3.14159265358979323846;
+  const double mid = 0.5 * (cxx + cyy), d = std::sqrt(0.25 * (cxx - cyy) * (cxx - cyy) + cxy * cxy);
+  h.elongation = std::sqrt((mid + d) / std::max(mid - d, 1e-12));
+  return h;
+}
+
+// Difference of two axis angles, modulo 180, in 0..90.
+double axisDifference(double a, double b) {
+  double d = std::fmod(std::fabs(a - b), 180.0);
+  return d > 90.0 ? 180.0 - d : d;
+}
+
+// Ward with alpha_x (along the tangent) 10x alpha_y: the sun's highlight is a streak along the
+// surface tangent, and turning the sphere a quarter turn about the view axis turns the streak
+// with it (the highlight stays where the sun's half vector puts it). Isotropic Ward is round.
+TEST_F(RendererPhysics, AnisotropicHighlightFollowsTheTangentAndTurnsWithTheObject) {
+  const int size = 128;
+  auto render = [&](float ax, float ay, float rotateZ) {
+    Scene s;
+    s.environment.name = "sky";
+    s.environment.visible = false;
+    s.render.width = s.render.height = size;
+    s.render.samplesPerFrame = 64;
+    s.render.maxSamples = 512;
+    s.render.sampling = SamplingMode::Brdf;
+    SceneObject o;
+    o.brdf = builtin("ward");
+    o.params = {{"rho_d", {0, 0, 0}}, {"rho_s", {1, 1, 1}}, {"alpha_x", {ax, 0, 0}}, {"alpha_y", {ay, 0, 0}}};
+    o.rotate = {0, 0, rotateZ};
+    s.objects.push_back(o);
+    auto view = renderer_->createView().value();
+    EXPECT_TRUE(view->setScene(s).ok());
+    return highlightOf(renderToConvergence(*view));
+  };
+  const Highlight along = render(0.3f, 0.03f, 0), turned = render(0.3f, 0.03f, 90), round = render(0.1f, 0.1f, 0);
+  std::printf("  highlight angle %.1f elongation %.2f; turned %.1f %.2f; isotropic %.2f\n", along.angle,
+              along.elongation, turned.angle, turned.elongation, round.elongation);
+
+  // The sphere's tangent (d/d longitude, horizontal in world) at the highlight, projected: the
+  // camera at +3 z looks down -z, so a world direction (tx, ty, tz) at p moves the image point
+  // along (tx + x_ndc tz, -(ty + y_ndc tz)) up to a positive factor (y down in the image).
+  const double pi = 3.14159265358979323846, tanHalf = std::tan(22.5 * pi / 180.0);
+  const double nx = (2.0 * (along.cx + 0.5) / size - 1.0) * tanHalf, ny = (1.0 - 2.0 * (along.cy + 0.5) / size) * tanHalf;
+  // Ray from (0, 0, 3) along (nx, ny, -1) meets the unit sphere at p; tangent = (p.z, 0, -p.x).
+  const double dd = nx * nx + ny * ny + 1, b = -3.0, c = 9.0 - 1.0;
+  const double t = (-b - std::sqrt(b * b - dd * c)) / dd;
+  const double px = nx * t, pz = 3.0 - t;
+  const double tx = pz, tz = -px;
+  const double tangentAngle = std::atan2(-(ny * tz), tx + nx * tz) * 180.0 / pi;  // ty = 0
+
+  EXPECT_GT(along.elongation, 2.5);
+  EXPECT_GT(turned.elongation, 2.5);
+  EXPECT_LT(round.elongation, 1.6);
+  EXPECT_LT(axisDifference(along.angle, tangentAngle), 15.0) << "tangent projects to " << tangentAngle;
+  EXPECT_GT(axisDifference(along.angle, turned.angle), 70.0);
+  // The highlight's place is set by the sun, not by the turn.
+  EXPECT_NEAR(along.cx, turned.cx, 3.0);
+  EXPECT_NEAR(along.cy, turned.cy, 3.0);
 }
 
 TEST_F(RendererPhysics, NanSamplesAreDroppedCountedAndNeverAccumulated) {
