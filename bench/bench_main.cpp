@@ -7,6 +7,7 @@
 
 #include "bench_http.h"
 #include "bench_renderer.h"
+#include "bench_scenes.h"
 
 int main(int argc, char** argv) {
   std::string source = BRDFA_SOURCE_DIR;
@@ -21,6 +22,8 @@ int main(int argc, char** argv) {
     }
   }
   int code = brdfa::bench::runRendererBench(source, rounds);
+  if (code != 0) return code;
+  code = brdfa::bench::runSceneBench(source, rounds);
   if (code != 0) return code;
   return brdfa::bench::runHttpBench(BRDFA_SERVER_BINARY, source);
 }

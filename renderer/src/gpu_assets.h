@@ -54,6 +54,7 @@ struct ShadeKernel {
   std::unique_ptr<ComputeKernel> kernel;
   ParamBlockLayout params;
   uint64_t programHash = 0;  // hash of the assembled source: identifies the compiled program
+  uint64_t spirvBytes = 0;   // size of its SPIR-V (what specialization saves shows here)
 };
 
 // Push constants of every compute kernel; mirrors BrdfaPush in shaders/lib/bindings.glsl.

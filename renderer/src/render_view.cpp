@@ -337,10 +337,14 @@ Result<void> RenderViewImpl::setScene(const Scene& scene) {
     sinceErrorMs_ = 0;
   }
   if (restart || displayChanged) ++stats_.sceneVersion;
-  stats_.vertices = stats_.triangles = 0;
+  stats_.vertices = stats_.triangles = stats_.programBytes = 0;
+  std::vector<uint64_t> programs;
   for (const ObjectState& o : objects_) {
     stats_.vertices += o.mesh->vertexCount;
     stats_.triangles += o.mesh->indexCount / 3;
+    if (std::find(programs.begin(), programs.end(), o.kernel->programHash) != programs.end()) continue;
+    programs.push_back(o.kernel->programHash);
+    stats_.programBytes += o.kernel->spirvBytes;
   }
   stats_.converged = stats_.spp >= static_cast<uint64_t>(scene_.render.maxSamples);
   return {};

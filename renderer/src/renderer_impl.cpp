@@ -440,6 +440,7 @@ Result<std::shared_ptr<const ShadeKernel>> RendererImpl::compiledKernel(const As
   compiled->kernel = std::move(kernel.value());
   compiled->params = program.params;
   compiled->programHash = program.hash;
+  compiled->spirvBytes = (*code)->words.size() * sizeof(uint32_t);
   kernelCache_.emplace(program.hash, compiled);
   kernelOrder_.push_back(program.hash);
   evictOldest(kernelCache_, kernelOrder_);

@@ -10,7 +10,7 @@ namespace brdfa {
 CameraFrame cameraFrame(const Camera& camera, uint32_t width, uint32_t height) {
   CameraFrame f;
   float yaw = glm::radians(camera.yaw);
-  float pitch = glm::radians(std::clamp(camera.pitch, -89.0f, 89.0f));
+  float pitch = glm::radians(std::clamp(camera.pitch, -kMaxPitch, kMaxPitch));
   f.position = glm::vec3(camera.position[0], camera.position[1], camera.position[2]);
   f.forward = glm::vec3(-std::sin(yaw) * std::cos(pitch), std::sin(pitch), -std::cos(yaw) * std::cos(pitch));
   f.right = glm::normalize(glm::cross(f.forward, glm::vec3(0, 1, 0)));

@@ -133,7 +133,10 @@ Result<void> parseCamera(const json& j, Camera& cam) {
   BRDFA_CHECK(optionalField(j, "yaw", "camera", cam.yaw,
                             [](const json& v, const std::string& f) { return readFloat(v, f, -kAbsurd, kAbsurd); }));
   BRDFA_CHECK(optionalField(j, "pitch", "camera", cam.pitch,
-                            [](const json& v, const std::string& f) { return readFloat(v, f, -90, 90); }));
+                            [](const json& v, const std::string& f) { return readFloat(v, f, -kAbsurd, kAbsurd); }));
+  // Clamped, not refused: mouse-look overshoots, and at +-90 degrees the view's up vector is
+  // undefined. The scene then reports the pitch it renders with.
+  cam.pitch = std::clamp(cam.pitch, -kMaxPitch, kMaxPitch);
   if (auto it = j.find("fov"); it != j.end()) {
     // Open interval: 0 and 180 degrees make a degenerate projection.
     Result<float> fov = readFloat(*it, "camera.fov", 1, 179);

@@ -55,6 +55,7 @@ struct FrameStats {
   std::optional<double> relError;  // relative RMS error from the two half accumulators
   uint64_t vertices = 0;
   uint64_t triangles = 0;
+  uint64_t programBytes = 0;  // SPIR-V size of the scene's distinct shading programs
   bool converged = false;     // spp reached render.max_samples
   uint64_t sceneVersion = 0;  // increments on every setScene that changed the scene
 };

@@ -86,5 +86,6 @@ inline constexpr int kMaxImageSize = 4096;
 inline constexpr int kMaxSamplesPerFrame = 1024;
 inline constexpr int kMaxTotalSamples = 1 << 20;
 inline constexpr int kMaxObjects = 64;
+inline constexpr float kMaxPitch = 89.0f;  // degrees; camera pitch is clamped to +-this
 
 }  // namespace brdfa
