@@ -1,5 +1,6 @@
 #include "host_resolve.h"
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstring>
@@ -46,20 +47,23 @@ const SrgbTables& tables() {
 
 float luminance(float r, float g, float b) { return 0.2126f * r + 0.7152f * g + 0.0722f * b; }
 
-}  // namespace
+// Same bound as BRDFA_TONE_MAX in tonemap.glsl: every curve has reached 1 far below it, and
+// it keeps Inf / Inf (NaN) out of the rational curves.
+constexpr float kToneMax = 1.0e6f;
 
-uint8_t linearToSrgb8(float x) {
-  const SrgbTables& t = tables();
-  if (!(x > 0.0f)) return 0;  // also NaN
-  if (x >= 1.0f) return 255;
-  uint32_t bits;
-  std::memcpy(&bits, &x, sizeof bits);
-  uint8_t code = t.coarse[bits >> 16];
-  return static_cast<uint8_t>(code + (x >= t.thresholds[code] ? 1 : 0));
+// The three curves of tonemap.glsl, on e already clamped to [0, kToneMax].
+float toneClamp(float e) { return std::min(e, 1.0f); }
+// Reinhard et al. 2002, eq. 3.
+float toneReinhard(float e) { return e / (1.0f + e); }
+// Narkowicz 2015, ACES filmic fit, clamped to [0, 1].
+float toneAces(float e) {
+  constexpr float a = 2.51f, b = 0.03f, c = 2.43f, d = 0.59f, f = 0.14f;
+  return std::clamp((e * (a * e + b)) / (e * (c * e + d) + f), 0.0f, 1.0f);
 }
 
-ErrorSums resolveOnHost(const HostResolveInput& in, uint8_t* rgba8, float* rgba32f) {
-  ErrorSums sums;
+// The per-pixel loop, specialised per tone map so the choice is made once per frame.
+template <float (*Tone)(float)>
+void resolvePixels(const HostResolveInput& in, uint8_t* rgba8, float* rgba32f, ErrorSums& sums) {
   const float* a = in.accum;
   const float* b = in.accum + 4 * in.pixels;
   for (size_t i = 0; i < in.pixels; ++i) {
@@ -71,7 +75,11 @@ ErrorSums resolveOnHost(const HostResolveInput& in, uint8_t* rgba8, float* rgba3
       for (int c = 0; c < 3; ++c) mean[c] = (pa[c] + pb[c]) / n;
     }
     if (rgba8) {
-      for (int c = 0; c < 3; ++c) rgba8[4 * i + c] = linearToSrgb8(mean[c] * in.exposureScale);
+      for (int c = 0; c < 3; ++c) {
+        const float e = mean[c] * in.exposureScale;
+        // !(e > 0) also sends NaN to 0, as linearToSrgb8 does.
+        rgba8[4 * i + c] = linearToSrgb8(e > 0.0f ? Tone(std::min(e, kToneMax)) : 0.0f);
+      }
       rgba8[4 * i + 3] = 255;
     }
     if (rgba32f) {
@@ -86,6 +94,38 @@ ErrorSums resolveOnHost(const HostResolveInput& in, uint8_t* rgba8, float* rgba3
       sums.luminance += luminance(mean[0], mean[1], mean[2]);
       sums.pixels += 1;
     }
+  }
+}
+
+}  // namespace
+
+float toneMapValue(float e, ToneMap toneMap) {
+  if (!(e > 0.0f)) return 0.0f;  // also NaN
+  e = std::min(e, kToneMax);
+  switch (toneMap) {
+    case ToneMap::Reinhard: return toneReinhard(e);
+    case ToneMap::Aces: return toneAces(e);
+    case ToneMap::Clamp: break;
+  }
+  return toneClamp(e);
+}
+
+uint8_t linearToSrgb8(float x) {
+  const SrgbTables& t = tables();
+  if (!(x > 0.0f)) return 0;  // also NaN
+  if (x >= 1.0f) return 255;
+  uint32_t bits;
+  std::memcpy(&bits, &x, sizeof bits);
+  uint8_t code = t.coarse[bits >> 16];
+  return static_cast<uint8_t>(code + (x >= t.thresholds[code] ? 1 : 0));
+}
+
+ErrorSums resolveOnHost(const HostResolveInput& in, uint8_t* rgba8, float* rgba32f) {
+  ErrorSums sums;
+  switch (in.toneMap) {
+    case ToneMap::Reinhard: resolvePixels<toneReinhard>(in, rgba8, rgba32f, sums); break;
+    case ToneMap::Aces: resolvePixels<toneAces>(in, rgba8, rgba32f, sums); break;
+    case ToneMap::Clamp: resolvePixels<toneClamp>(in, rgba8, rgba32f, sums); break;
   }
   return sums;
 }

@@ -29,6 +29,10 @@ struct HostResolveInput {
 // returns the error sums.
 ErrorSums resolveOnHost(const HostResolveInput& in, uint8_t* rgba8, float* rgba32f);
 
+// The tone map of an exposed radiance value e (one channel), into [0, 1]; the same formulas as
+// shaders/lib/tonemap.glsl (see ToneMap in scene.h). Negative maps to 0, +Inf to 1.
+float toneMapValue(float e, ToneMap toneMap);
+
 // Exact 8-bit sRGB encoding of a linear value (IEC 61966-2-1, rounded to nearest), clamped to
 // [0, 1]; NaN maps to 0.
 uint8_t linearToSrgb8(float linear);

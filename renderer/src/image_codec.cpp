@@ -1,6 +1,7 @@
-// PNG (stb_image_write with zlib level 1 and the Sub filter) and PFM encoders.
+// PNG (stb_image_write with zlib level 1 and the Sub filter), PFM and EXR (tinyexr) encoders.
 #include "brdfa/image_codec.h"
 
+#include <tinyexr.h>  // Debian's shared libtinyexr: never define TINYEXR_IMPLEMENTATION here
 #include <zlib.h>
 
 #include <cstdlib>
@@ -115,6 +116,62 @@ std::vector<uint8_t> encodePfm(const float* rgba32f, int width, int height) {
     for (int x = 0; x < width; ++x)
       for (int c = 0; c < 3; ++c) appendFloatLE(out, row[x * 4 + c]);
   }
+  return out;
+}
+
+std::vector<uint8_t> encodeExr(const float* rgba32f, int width, int height, bool alpha, std::string* error) {
+  std::vector<uint8_t> out;
+  if (!rgba32f || width <= 0 || height <= 0) {
+    if (error) *error = "encodeExr: no image";
+    return out;
+  }
+  // EXR stores channels as separate planes, listed in alphabetical order (A, B, G, R), which
+  // readers such as OpenEXR expect.
+  const int channels = alpha ? 4 : 3;
+  const char* names[4] = {"A", "B", "G", "R"};
+  const int source[4] = {3, 2, 1, 0};  // RGBA component of each listed channel
+  const int first = alpha ? 0 : 1;
+  const size_t pixels = size_t(width) * height;
+  std::vector<std::vector<float>> planes(channels, std::vector<float>(pixels));
+  std::vector<unsigned char*> planePtrs(channels);
+  std::vector<EXRChannelInfo> infos(channels);
+  std::vector<int> pixelTypes(channels, TINYEXR_PIXELTYPE_FLOAT);
+  for (int c = 0; c < channels; ++c) {
+    const int component = source[first + c];
+    for (size_t i = 0; i < pixels; ++i) planes[c][i] = rgba32f[4 * i + component];
+    planePtrs[c] = reinterpret_cast<unsigned char*>(planes[c].data());
+    std::memset(&infos[c], 0, sizeof infos[c]);
+    std::strncpy(infos[c].name, names[first + c], sizeof infos[c].name - 1);
+    infos[c].pixel_type = TINYEXR_PIXELTYPE_FLOAT;
+  }
+
+  EXRImage image;
+  InitEXRImage(&image);
+  image.images = planePtrs.data();
+  image.width = width;
+  image.height = height;
+  image.num_channels = channels;
+
+  EXRHeader header;
+  InitEXRHeader(&header);
+  header.num_channels = channels;
+  header.channels = infos.data();
+  header.pixel_types = pixelTypes.data();            // what the planes hold
+  header.requested_pixel_types = pixelTypes.data();  // what the file stores: float, no loss
+  header.compression_type = TINYEXR_COMPRESSIONTYPE_ZIP;
+  header.line_order = 0;  // increasing y: row 0 (the top) first
+
+  unsigned char* memory = nullptr;
+  const char* err = nullptr;
+  const size_t size = SaveEXRImageToMemory(&image, &header, &memory, &err);
+  if (size == 0 || !memory) {
+    if (error) *error = err ? err : "tinyexr could not encode the image";
+    if (err) FreeEXRErrorMessage(err);
+    std::free(memory);
+    return out;
+  }
+  out.assign(memory, memory + size);
+  std::free(memory);  // tinyexr allocates the buffer with malloc
   return out;
 }
 

@@ -3,6 +3,7 @@
 #include <charconv>
 #include <cstdlib>
 #include <string_view>
+#include <type_traits>
 
 #ifndef BRDFA_DEFAULT_ROOT
 #define BRDFA_DEFAULT_ROOT "."
@@ -44,6 +45,19 @@ std::string usageText(const char* program) {
          "  --idle-timeout S  seconds a session keeps rendering without a watcher (default 30)\n"
          "  --no-cache-load   ignore cached SPIR-V (<data-dir>/cache/spirv), compile afresh and\n"
          "                    refresh the cache\n"
+         "  --max-upload-bytes N      largest uploaded asset file in bytes (default 67108864 = 64 MiB)\n"
+         "  --max-upload-triangles N  most triangles in one uploaded mesh (default 2000000)\n"
+         "  --max-upload-pixels N     most pixels (width * height) in one uploaded image\n"
+         "                            (default 16777216 = 4096 x 4096)\n"
+         "  --max-assets N            most uploads kept in <data-dir>/assets (default 1000; 0 refuses\n"
+         "                            uploads)\n"
+         "  --max-assets-bytes N      most bytes all kept uploads may take together (default\n"
+         "                            4294967296 = 4 GiB)\n"
+         "  --environment-dir DIR     register every *.exr in DIR that the renderer can read as the\n"
+         "                            read-only environment blender_<name>; repeatable (default:\n"
+         "                            Debian blender-data's\n"
+         "                            /usr/share/blender/datafiles/studiolights/world and\n"
+         "                            /usr/share/blender/*/datafiles/studiolights/world, if present)\n"
          "  --hot-load        after start-up, build in the background the pipelines of every\n"
          "                    BRDF whose SPIR-V is cached (never compiling GLSL), so BRDFs used\n"
          "                    before are instant on first use; without it BRDFs compile on\n"
@@ -85,14 +99,15 @@ ParseOutcome parse_command_line(int argc, const char* const* argv) {
       if (i + 1 >= argc) return std::nullopt;
       return std::string(argv[++i]);
     };
-    auto takeInt = [&](long long lo, long long hi, int& dst) -> std::optional<std::string> {
+    // An integer in lo..hi into `dst` (int or uint64_t); the error message otherwise.
+    auto takeInt = [&](long long lo, long long hi, auto& dst) -> std::optional<std::string> {
       auto v = takeValue();
       if (!v) return std::string(name) + " needs a value";
       auto n = parseInteger(*v);
       if (!n || *n < lo || *n > hi)
         return std::string(name) + " must be an integer in " + std::to_string(lo) + ".." + std::to_string(hi) +
                ", got '" + *v + "'";
-      dst = static_cast<int>(*n);
+      dst = static_cast<std::remove_reference_t<decltype(dst)>>(*n);
       return std::nullopt;
     };
     auto takeString = [&](std::string& dst) -> std::optional<std::string> {
@@ -117,6 +132,24 @@ ParseOutcome parse_command_line(int argc, const char* const* argv) {
       err = takeInt(2, 1024, config.threads);
     else if (name == "--idle-timeout")
       err = takeInt(1, 24 * 3600, config.idleTimeoutSec);
+    else if (name == "--max-upload-bytes")
+      err = takeInt(1, 1ll << 30, config.maxUploadBytes);
+    else if (name == "--max-upload-triangles")
+      err = takeInt(1, 100'000'000, config.maxUploadTriangles);
+    else if (name == "--max-upload-pixels")
+      err = takeInt(1, 1ll << 28, config.maxUploadPixels);
+    else if (name == "--max-assets")
+      err = takeInt(0, 1'000'000, config.maxAssets);
+    else if (name == "--max-assets-bytes")
+      err = takeInt(0, 1ll << 50, config.maxAssetsBytes);
+    else if (name == "--environment-dir") {
+      std::string dir;
+      err = takeString(dir);
+      if (!err) {
+        if (!config.environmentDirs) config.environmentDirs.emplace();
+        config.environmentDirs->push_back(dir);
+      }
+    }
     else
       err = "unknown option '" + std::string(arg) + "'";
     if (err) return fail(*err + "\n" + usageText(argv[0]));

@@ -27,7 +27,9 @@ Result<std::unique_ptr<HttpServer>> HttpServer::create(const ServerConfig& confi
   // Every stream client holds one worker for as long as it watches.
   size_t threads = static_cast<size_t>(config.threads);
   http.new_task_queue = [threads] { return new httplib::ThreadPool(threads); };
-  http.set_payload_max_length(kMaxJsonBody);
+  // Uploads need more than a JSON body; the JSON and .brdf routes check their own, smaller
+  // limits (readJsonBody, readBrdfTextBody), the upload route its file limit.
+  http.set_payload_max_length(out->service_->maxRequestBody());
   // Short keep-alive: idle browser connections otherwise hold shutdown for the full timeout.
   http.set_keep_alive_timeout(2);
 
@@ -37,6 +39,7 @@ Result<std::unique_ptr<HttpServer>> HttpServer::create(const ServerConfig& confi
   registerSessionRoutes(http, s);
   registerRenderRoutes(http, s);
   registerJobRoutes(http, s);
+  registerAssetRoutes(http, s);
   registerStaticRoutes(http, s);
   return out;
 }

@@ -7,6 +7,7 @@
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include "brdfa_server/service.h"
 
@@ -17,6 +18,7 @@ void registerBrdfRoutes(httplib::Server& server, Service& service);
 void registerSessionRoutes(httplib::Server& server, Service& service);
 void registerRenderRoutes(httplib::Server& server, Service& service);
 void registerJobRoutes(httplib::Server& server, Service& service);  // batch tests
+void registerAssetRoutes(httplib::Server& server, Service& service);  // uploads, listing
 void registerStaticRoutes(httplib::Server& server, Service& service);  // last: catch-all GET
 
 // Parses the body as JSON; on failure answers 400 bad_json and returns nullopt.
@@ -27,5 +29,25 @@ std::optional<std::string> readBrdfTextBody(const httplib::Request& req, httplib
 
 // Headers every image response carries.
 void setFrameHeaders(httplib::Response& res, const FrameStats& stats);
+
+// Image formats of frames (GET .../frame?format=, POST /api/render "format"): PNG is the
+// tone-mapped display image; PFM and EXR are linear float radiance, never tone mapped.
+enum class FrameFormat { Png, Pfm, Exr };
+inline constexpr const char* kFrameFormatChoices = "png, pfm or exr";
+std::optional<FrameFormat> frameFormatFromName(const std::string& name);
+bool frameFormatIsFloat(FrameFormat format);  // PFM, EXR: needs Frame::rgba32f
+
+// Encodes a frame (rgba8 for PNG, rgba32f for PFM/EXR); empty on an encoder failure.
+std::vector<uint8_t> encodeFrame(const Frame& frame, FrameFormat format);
+
+// Reads ?download= (absent, "0", "false": inline; "1", "true": attachment); on a bad value
+// answers 400 `field: download` and returns nullopt.
+std::optional<bool> readDownloadParam(const httplib::Request& req, httplib::Response& res);
+
+// The image body with its Content-Type and `Content-Disposition: inline|attachment;
+// filename="<stem>-<spp>spp.<ext>"` (`stem`: the session id, or "render"), plus the frame
+// headers. An empty `bytes` (the encoder failed) answers 500.
+void sendFrame(httplib::Response& res, const std::vector<uint8_t>& bytes, FrameFormat format, const FrameStats& stats,
+               const std::string& stem, bool download);
 
 }  // namespace brdfa::server

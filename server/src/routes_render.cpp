@@ -42,7 +42,58 @@ Result<int> readSpp(const nlohmann::json& v) {
   return static_cast<int>(d);
 }
 
+// Name (also the file extension) and Content-Type of each FrameFormat, in enum order.
+struct FrameFormatInfo {
+  FrameFormat format;
+  const char* name;
+  const char* contentType;
+};
+constexpr FrameFormatInfo kFrameFormats[] = {
+    {FrameFormat::Png, "png", "image/png"},
+    {FrameFormat::Pfm, "pfm", "application/x-portable-floatmap"},
+    {FrameFormat::Exr, "exr", "image/x-exr"},
+};
+
+const FrameFormatInfo& infoOf(FrameFormat format) { return kFrameFormats[static_cast<int>(format)]; }
+
 }  // namespace
+
+std::optional<FrameFormat> frameFormatFromName(const std::string& name) {
+  for (const FrameFormatInfo& f : kFrameFormats)
+    if (name == f.name) return f.format;
+  return std::nullopt;
+}
+
+bool frameFormatIsFloat(FrameFormat format) { return format != FrameFormat::Png; }
+
+std::vector<uint8_t> encodeFrame(const Frame& f, FrameFormat format) {
+  switch (format) {
+    case FrameFormat::Pfm: return encodePfm(f.rgba32f.data(), f.width, f.height);
+    case FrameFormat::Exr: return encodeExr(f.rgba32f.data(), f.width, f.height);
+    case FrameFormat::Png: break;
+  }
+  return encodePng(f.rgba8.data(), f.width, f.height);
+}
+
+std::optional<bool> readDownloadParam(const httplib::Request& req, httplib::Response& res) {
+  if (!req.has_param("download")) return false;
+  const std::string v = req.get_param_value("download");
+  if (v == "1" || v == "true") return true;
+  if (v == "0" || v == "false") return false;
+  sendError(res, 400, "invalid_argument", "download must be 1 or 0 (true or false)", "download");
+  return std::nullopt;
+}
+
+void sendFrame(httplib::Response& res, const std::vector<uint8_t>& bytes, FrameFormat format, const FrameStats& stats,
+               const std::string& stem, bool download) {
+  if (bytes.empty())
+    return sendError(res, 500, "internal", std::string("could not encode the frame as ") + infoOf(format).name);
+  setFrameHeaders(res, stats);
+  // `stem` is a session id ([0-9a-f]+ or "default") or "render": nothing to quote or escape.
+  res.set_header("Content-Disposition", std::string(download ? "attachment" : "inline") + "; filename=\"" + stem +
+                                            "-" + std::to_string(stats.spp) + "spp." + infoOf(format).name + "\"");
+  res.set_content(reinterpret_cast<const char*>(bytes.data()), bytes.size(), infoOf(format).contentType);
+}
 
 void registerRenderRoutes(httplib::Server& server, Service& service) {
   server.Post("/api/render", [&service](const httplib::Request& req, httplib::Response& res) {
@@ -75,12 +126,15 @@ void registerRenderRoutes(httplib::Server& server, Service& service) {
       if (!r) return sendError(res, r.error());
       spp = r.value();
     }
-    std::string format = "png";
+    FrameFormat format = FrameFormat::Png;
     if (auto it = body.find("format"); it != body.end()) {
-      if (!it->is_string() || (*it != "png" && *it != "pfm"))
-        return sendError(res, 400, "invalid_argument", "format must be \"png\" or \"pfm\"", "format");
-      format = it->get<std::string>();
+      std::optional<FrameFormat> f = it->is_string() ? frameFormatFromName(it->get<std::string>()) : std::nullopt;
+      if (!f)
+        return sendError(res, 400, "invalid_argument", std::string("format must be ") + kFrameFormatChoices, "format");
+      format = *f;
     }
+    std::optional<bool> download = readDownloadParam(req, res);
+    if (!download) return;
     std::shared_ptr<const BrdfDefinition> inlineBrdf;
     if (auto it = body.find("brdf_source"); it != body.end()) {
       if (!it->is_string())
@@ -125,15 +179,9 @@ void registerRenderRoutes(httplib::Server& server, Service& service) {
       if (!pass) return sendError(res, pass.error());
       if (pass.value().converged) break;
     }
-    bool pfm = format == "pfm";
-    Result<Frame> frame = v.readFrame(pfm);
+    Result<Frame> frame = v.readFrame(frameFormatIsFloat(format));
     if (!frame) return sendError(res, frame.error());
-    const Frame& f = frame.value();
-    std::vector<uint8_t> bytes =
-        pfm ? encodePfm(f.rgba32f.data(), f.width, f.height) : encodePng(f.rgba8.data(), f.width, f.height);
-    setFrameHeaders(res, f.stats);
-    res.set_content(reinterpret_cast<const char*>(bytes.data()), bytes.size(),
-                    pfm ? "application/x-portable-floatmap" : "image/png");
+    sendFrame(res, encodeFrame(frame.value(), format), format, frame.value().stats, "render", *download);
   });
 }
 

@@ -209,9 +209,12 @@ void registerSessionRoutes(httplib::Server& server, Service& service) {
   });
 
   server.Get("/api/sessions/([^/]+)/frame", [&service](const httplib::Request& req, httplib::Response& res) {
-    std::string format = req.has_param("format") ? req.get_param_value("format") : "png";
-    if (format != "png" && format != "pfm")
-      return sendError(res, 400, "invalid_argument", "format must be png or pfm", "format");
+    std::optional<FrameFormat> format =
+        frameFormatFromName(req.has_param("format") ? req.get_param_value("format") : "png");
+    if (!format)
+      return sendError(res, 400, "invalid_argument", std::string("format must be ") + kFrameFormatChoices, "format");
+    std::optional<bool> download = readDownloadParam(req, res);
+    if (!download) return;
     // Default 1: "the latest frame" always has at least one sample in it (not a black image
     // right after a scene change). min_spp=0 answers at once with whatever there is.
     uint64_t minSpp = 1;
@@ -231,7 +234,8 @@ void registerSessionRoutes(httplib::Server& server, Service& service) {
                        "too many requests waiting for samples (at most " + std::to_string(service.maxFrameWaiters) +
                            "); retry later or without min_spp");
     }
-    const bool pfm = format == "pfm";
+    // The session encodes PNG or PFM; EXR is made from the PFM's floats (the same radiance).
+    const bool pfm = frameFormatIsFloat(*format);
     Session::WaitOutcome outcome = Session::WaitOutcome::Reached;
     auto frame = session->waitAndEncodeFrame(minSpp, kFrameWait, pfm, outcome);
     service.frameWaiters.fetch_sub(1);
@@ -246,9 +250,13 @@ void registerSessionRoutes(httplib::Server& server, Service& service) {
         break;
     }
     if (!frame) return sendError(res, frame.error());
-    setFrameHeaders(res, frame->stats);
-    res.set_content(reinterpret_cast<const char*>(frame->bytes.data()), frame->bytes.size(),
-                    pfm ? "application/x-portable-floatmap" : "image/png");
+    if (*format == FrameFormat::Exr) {
+      Frame linear;
+      if (!decodePfm(frame->bytes, linear.width, linear.height, linear.rgba32f))
+        return sendError(res, 500, "internal", "could not read back the frame's float radiance");
+      frame->bytes = encodeFrame(linear, FrameFormat::Exr);
+    }
+    sendFrame(res, frame->bytes, *format, frame->stats, session->id(), *download);
   });
 
   // multipart/x-mixed-replace: each part is one PNG. The render thread publishes at most ~30

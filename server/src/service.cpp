@@ -4,6 +4,8 @@
 #include <cstdio>
 #include <filesystem>
 
+#include "brdfa_server/request_body.h"
+
 namespace brdfa::server {
 
 bool RenderSlots::acquire(std::chrono::milliseconds timeout) {
@@ -74,6 +76,16 @@ Result<std::unique_ptr<Service>> Service::create(const ServerConfig& config, std
   if (!renderer) return renderer.takeError();
   service->renderer = std::move(renderer.value());
 
+  AssetStoreLimits assetLimits;
+  assetLimits.file.maxBytes = config.maxUploadBytes;
+  assetLimits.file.maxTriangles = config.maxUploadTriangles;
+  assetLimits.file.maxPixels = config.maxUploadPixels;
+  assetLimits.maxAssets = static_cast<size_t>(config.maxAssets);
+  assetLimits.maxTotalBytes = config.maxAssetsBytes;
+  service->assets =
+      std::make_unique<AssetStore>(service->renderer, config.dataDir, assetLimits, service->uploadSlots);
+  for (std::string& msg : service->assets->load(config.environmentDirs)) log.push_back(std::move(msg));
+
   for (std::string& msg :
        service->library.loadBuiltins((std::filesystem::path(config.root) / "shaders" / "brdfs").string()))
     log.push_back("warning: " + msg);
@@ -107,7 +119,12 @@ SceneResolver Service::resolver(std::shared_ptr<const BrdfDefinition> inlineBrdf
   r.inlineBrdf = std::move(inlineBrdf);
   r.environments = renderer->environmentNames();
   r.meshes = renderer->meshNames();
+  r.textures = renderer->textureNames();
   return r;
+}
+
+size_t Service::maxRequestBody() const {
+  return std::max<size_t>(kMaxJsonBody, static_cast<size_t>(config.maxUploadBytes) + kMultipartOverhead);
 }
 
 std::string Service::userBrdfDir() const { return (std::filesystem::path(config.dataDir) / "brdfs").string(); }
@@ -121,6 +138,7 @@ void Service::beginShutdown() {
   if (jobs) jobs->stop();
   hotLoader.stop();
   renderSlots.shutdown();
+  uploadSlots.shutdown();
   if (sessions) sessions->stopAll();
 }
 

@@ -17,7 +17,7 @@ void main() {
     vec4 b = brdfa_accum[brdfa_halfOffset(1u) + i];
     float n = a.w + b.w;
     vec3 mean = n > 0.0 ? (a.rgb + b.rgb) / n : vec3(0.0);  // guard: no samples yet
-    brdfa_outRgba8[i] = brdfa_packSrgb8(mean, brdfa_pc.tone.x);
+    brdfa_outRgba8[i] = brdfa_packSrgb8(mean, brdfa_pc.tone.x, brdfa_pc.tone.y);  // exposure, tone map
     if (brdfa_pc.target.z != 0u) brdfa_outFloat[i] = vec4(mean, 1.0);
     bool objectPixel = brdfa_gPosition(i).w != 0.0;
     if (objectPixel && a.w > 0.0 && b.w > 0.0) {

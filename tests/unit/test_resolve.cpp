@@ -37,7 +37,35 @@ TEST(SrgbEncode, MatchesTheExactRoundingRuleEverywhere) {
   EXPECT_EQ(linearToSrgb8(0.18f), 118);  // mid grey
 }
 
-Frame renderWith(ResolveMode mode) {
+TEST(ToneMap, CurvesOfTheBrief) {
+  // Clamp: min(e, 1).
+  EXPECT_EQ(toneMapValue(0.25f, ToneMap::Clamp), 0.25f);
+  EXPECT_EQ(toneMapValue(3.0f, ToneMap::Clamp), 1.0f);
+  // Reinhard et al. 2002: e / (1 + e).
+  EXPECT_FLOAT_EQ(toneMapValue(1.0f, ToneMap::Reinhard), 0.5f);
+  EXPECT_FLOAT_EQ(toneMapValue(3.0f, ToneMap::Reinhard), 0.75f);
+  // Narkowicz 2015: (e (2.51 e + 0.03)) / (e (2.43 e + 0.59) + 0.14), clamped to [0, 1].
+  EXPECT_FLOAT_EQ(toneMapValue(1.0f, ToneMap::Aces), 2.54f / 3.16f);
+  EXPECT_FLOAT_EQ(toneMapValue(0.18f, ToneMap::Aces),
+                  0.18f * (2.51f * 0.18f + 0.03f) / (0.18f * (2.43f * 0.18f + 0.59f) + 0.14f));
+  EXPECT_EQ(toneMapValue(100.0f, ToneMap::Aces), 1.0f);  // the fit tends to 2.51 / 2.43 > 1
+  for (ToneMap t : {ToneMap::Clamp, ToneMap::Reinhard, ToneMap::Aces}) {
+    EXPECT_EQ(toneMapValue(0.0f, t), 0.0f);
+    EXPECT_EQ(toneMapValue(-2.0f, t), 0.0f);  // negative radiance from a bad BRDF
+    EXPECT_EQ(toneMapValue(NAN, t), 0.0f);
+    EXPECT_NEAR(toneMapValue(INFINITY, t), 1.0f, 1e-4f);  // never Inf / Inf
+    EXPECT_NEAR(toneMapValue(3.0e38f, t), 1.0f, 1e-4f);
+    float previous = 0.0f;  // monotonic
+    for (float e = 0.001f; e < 50.0f; e *= 1.1f) {
+      float v = toneMapValue(e, t);
+      EXPECT_GE(v, previous) << e;
+      EXPECT_LE(v, 1.0f);
+      previous = v;
+    }
+  }
+}
+
+Frame renderWith(ResolveMode mode, ToneMap toneMap = ToneMap::Clamp, float exposure = 0.5f) {
   RendererOptions options;
   options.shaderDir = std::string(BRDFA_SOURCE_DIR) + "/shaders";
   options.resolve = mode;
@@ -52,7 +80,8 @@ Frame renderWith(ResolveMode mode) {
   s.render.height = 64;
   s.render.samplesPerFrame = 4;
   s.render.maxSamples = 40;
-  s.render.exposure = 0.5f;
+  s.render.exposure = exposure;
+  s.render.toneMap = toneMap;
   SceneObject o;
   o.brdf = std::make_shared<BrdfDefinition>(parseBrdf(text.str()).value());
   s.objects.push_back(o);
@@ -63,9 +92,7 @@ Frame renderWith(ResolveMode mode) {
   return (*view)->readFrame(true).value();
 }
 
-TEST(Resolve, HostAndDevicePathsAgree) {
-  Frame host = renderWith(ResolveMode::Host);
-  Frame device = renderWith(ResolveMode::Device);
+void expectSameFrames(const Frame& host, const Frame& device) {
   ASSERT_EQ(host.rgba32f.size(), device.rgba32f.size());
   ASSERT_EQ(host.rgba8.size(), device.rgba8.size());
   for (size_t i = 0; i < host.rgba32f.size(); ++i)
@@ -74,6 +101,30 @@ TEST(Resolve, HostAndDevicePathsAgree) {
   ASSERT_TRUE(host.stats.relError && device.stats.relError);
   EXPECT_NEAR(*host.stats.relError, *device.stats.relError, 1e-4 * *host.stats.relError);
   EXPECT_GT(*host.stats.relError, 0.0);
+}
+
+TEST(Resolve, HostAndDevicePathsAgree) {
+  expectSameFrames(renderWith(ResolveMode::Host), renderWith(ResolveMode::Device));
+}
+
+// The tone maps of shaders/lib/tonemap.glsl and host_resolve.cpp agree, on a frame exposed so
+// that much of it is above 1 (where the curves differ most from a clamp).
+TEST(Resolve, HostAndDeviceToneMapsAgree) {
+  for (ToneMap t : {ToneMap::Reinhard, ToneMap::Aces}) {
+    SCOPED_TRACE(toneMapName(t));
+    Frame host = renderWith(ResolveMode::Host, t, 3.0f);
+    Frame device = renderWith(ResolveMode::Device, t, 3.0f);
+    expectSameFrames(host, device);
+    // The display image is the tone map of the exposed radiance, then sRGB.
+    int saturated = 0;
+    for (size_t i = 0; i < host.rgba32f.size(); i += 4)
+      for (int c = 0; c < 3; ++c) {
+        const float e = host.rgba32f[i + c] * 8.0f;
+        saturated += e > 1.0f;
+        ASSERT_EQ(host.rgba8[i + c], linearToSrgb8(toneMapValue(e, t))) << i;
+      }
+    EXPECT_GT(saturated, 100);
+  }
 }
 
 }  // namespace

@@ -1,7 +1,8 @@
-// Encoders for frames leaving the service.
+// Encoders for frames leaving the service: PNG (display), PFM and EXR (linear float radiance).
 #pragma once
 
 #include <cstdint>
+#include <string>
 #include <vector>
 
 namespace brdfa {
@@ -13,6 +14,13 @@ std::vector<uint8_t> encodePng(const uint8_t* rgba8, int width, int height);
 // Portable float map ("PF", RGB, little-endian, scale -1). PFM stores rows bottom to top; the
 // input is row 0 at the top, as everywhere else in this project.
 std::vector<uint8_t> encodePfm(const float* rgba32f, int width, int height);
+
+// OpenEXR (scanline, ZIP-compressed, 32-bit float) of linear radiance, through tinyexr. The
+// input is RGBA floats, row 0 at the top (EXR stores rows top to bottom, so it stays there);
+// `alpha` false writes R, G, B only (as PFM does), true adds A. Empty on failure (bad
+// arguments, or tinyexr's error, which goes to `error` when given).
+std::vector<uint8_t> encodeExr(const float* rgba32f, int width, int height, bool alpha = false,
+                               std::string* error = nullptr);
 
 // Parses a PFM written by encodePfm (or any "PF"/"Pf" file) into RGBA floats, row 0 at the top.
 // Returns false on malformed input. Used by tests and tools.

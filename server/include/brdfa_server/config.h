@@ -2,8 +2,10 @@
 // example style: one plain struct, one parse function, no globals).
 #pragma once
 
+#include <cstdint>
 #include <optional>
 #include <string>
+#include <vector>
 
 namespace brdfa::server {
 
@@ -17,6 +19,15 @@ struct ServerConfig {
   bool loadCache = true;           // --no-cache-load: compile afresh, then refresh the cache
   bool hotLoad = false;            // --hot-load: build cached BRDFs' pipelines after start-up
   int idleTimeoutSec = 30;         // a session with no watcher for this long stops rendering
+  // Uploads (POST /api/assets), stored in <dataDir>/assets. Each limit has a flag of its name.
+  uint64_t maxUploadBytes = 64ull << 20;      // --max-upload-bytes: one file's size
+  uint64_t maxUploadTriangles = 2'000'000;    // --max-upload-triangles: of one mesh
+  uint64_t maxUploadPixels = 16'777'216;      // --max-upload-pixels: width * height of one image
+  int maxAssets = 1000;                       // --max-assets: stored uploads (0 disables uploads)
+  uint64_t maxAssetsBytes = 4ull << 30;       // --max-assets-bytes: all stored upload files together
+  // --environment-dir (repeatable): folders whose *.exr become read-only environments
+  // `blender_<stem>`. Unset: Debian blender-data's studio-light worlds, when installed.
+  std::optional<std::vector<std::string>> environmentDirs;
 };
 
 // What parse_command_line decided: run with `config`, or exit with `exitCode` after printing

@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "brdfa/renderer.h"
+#include "brdfa_server/asset_store.h"
 #include "brdfa_server/brdf_library.h"
 #include "brdfa_server/config.h"
 #include "brdfa_server/hot_load.h"
@@ -28,6 +29,11 @@ inline constexpr std::chrono::seconds kRenderSlotWait{30};  // then 503 busy
 inline constexpr std::chrono::seconds kFrameWait{60};       // min_spp wait bound
 inline constexpr int kMaxOneShotSpp = 65536;
 inline constexpr int kMaxQueuedRenders = 8;  // waiting for a slot; 503 beyond
+inline constexpr int kMaxConcurrentUploadChecks = 2;  // uploads decoded by inspectAsset at once
+inline constexpr int kMaxQueuedUploadChecks = 8;      // waiting for one; 503 beyond
+// Room for the multipart framing around a file of --max-upload-bytes (boundaries, part
+// headers, the `kind` field): the HTTP payload limit is max-upload-bytes plus this.
+inline constexpr size_t kMultipartOverhead = 1u << 20;
 
 // A counting semaphore whose waiters give up on timeout or shutdown.
 class RenderSlots {
@@ -57,6 +63,9 @@ struct Service {
   // applied lazily, on first use). `log` receives start-up warnings.
   static Result<std::unique_ptr<Service>> create(const ServerConfig& config, std::vector<std::string>& log);
 
+  // The largest request body the HTTP layer reads: a JSON body or an upload with its framing.
+  size_t maxRequestBody() const;
+
   // Name resolution for scene JSON; `inlineBrdf` enables objects with "brdf": "inline".
   SceneResolver resolver(std::shared_ptr<const BrdfDefinition> inlineBrdf = nullptr) const;
 
@@ -67,6 +76,8 @@ struct Service {
   ServerConfig config;
   std::shared_ptr<Renderer> renderer;  // declared before sessions: views die before the device
   BrdfLibrary library;
+  RenderSlots uploadSlots{kMaxConcurrentUploadChecks, kMaxQueuedUploadChecks};
+  std::unique_ptr<AssetStore> assets;  // uploads and Blender worlds, registered with the renderer
   std::unique_ptr<SessionManager> sessions;
   std::unique_ptr<JobManager> jobs;  // batch tests; its workers stop in beginShutdown
   HotLoader hotLoader;               // --hot-load; stops in beginShutdown

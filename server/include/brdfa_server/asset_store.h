@@ -1,0 +1,126 @@
+// Uploaded scene assets (issue 4): meshes (OBJ), textures (PNG, JPEG) and environments (HDR,
+// EXR, PNG/JPEG cross cube maps), kept in <dataDir>/assets as `<id>.<ext>` plus `<id>.json`
+// (the metadata), and the read-only Blender worlds found in the environment folders.
+//
+// Nothing a client sends ever becomes a path: ids are generated (kind prefix + 16 random hex
+// digits), the original file name is kept for display only, and lookups by id read memory,
+// never the file system. Every stored upload is validated by content (brdfa::inspectAsset)
+// before it is written, and named to the renderer with Renderer::registerAsset.
+#pragma once
+
+#include <cstdint>
+#include <map>
+#include <memory>
+#include <mutex>
+#include <nlohmann/json.hpp>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "brdfa/assets.h"
+#include "brdfa/renderer.h"
+#include "brdfa/result.h"
+
+namespace brdfa::server {
+
+class RenderSlots;
+
+struct AssetStoreLimits {
+  AssetLimits file;               // per file: bytes, triangles, pixels
+  size_t maxAssets = 1000;        // stored uploads
+  uint64_t maxTotalBytes = 4ull << 30;  // all stored upload files together
+};
+
+// One file part of a multipart upload, as the client sent it.
+struct AssetUpload {
+  std::string_view bytes;  // the content; may hold only a prefix when `size` exceeds the limit
+  uint64_t size = 0;       // the part's full size in bytes
+  std::string kind;        // the `kind` form field; empty: from the content
+  std::string fileName;    // the part's file name (display only; checked against the content)
+  std::string contentType; // the part's Content-Type (checked against the content)
+};
+
+// Why add() refused an upload, beside the Error (whose code maps to the HTTP status): a stable
+// snake_case word for scripts.
+enum class AssetRejection {
+  None,
+  Empty,          // no bytes
+  TooLarge,       // over the byte limit (sizes in the message)
+  UnknownFormat,  // not OBJ, PNG, JPEG, HDR or EXR by content
+  BadKind,        // `kind` is not mesh, texture or environment
+  Mislabelled,    // kind, file-name extension or Content-Type contradicts the content
+  Invalid,        // inspectAsset refused it: truncated, corrupt, limits exceeded, ...
+  StorageFull,    // --max-assets or --max-assets-bytes reached
+  Busy,           // no inspection slot within the wait (or shutting down)
+  StorageError,   // writing the files failed
+};
+const char* assetRejectionName(AssetRejection reason);  // "empty", "too_large", ...
+
+// What is known of one asset; `source` is "builtin", "blender-data" or "upload".
+struct AssetRecord {
+  std::string id;
+  AssetKind kind = AssetKind::Mesh;
+  std::string source;
+  std::optional<AssetFormat> format;  // unknown for built-ins
+  std::string layout;                 // environments: "equirect" | "cross"
+  std::string name;                   // uploads: the sanitized original file name
+  uint64_t bytes = 0, vertices = 0, triangles = 0;
+  int width = 0, height = 0;
+  std::string created;                // uploads: ISO 8601 UTC
+};
+
+class AssetStore {
+ public:
+  // `slots` bounds how many uploads are decoded at once (memory); it must outlive the store.
+  AssetStore(std::shared_ptr<Renderer> renderer, std::string dataDir, AssetStoreLimits limits, RenderSlots& slots);
+
+  // At start-up: removes leftover temp files, re-registers every stored upload whose metadata
+  // and file are intact (others are logged and skipped; a data file without metadata was never
+  // acknowledged and is removed), then registers the *.exr files of `environmentDirs` (nullopt:
+  // defaultEnvironmentDirs()) as `blender_<stem>`. Returns log lines.
+  std::vector<std::string> load(const std::optional<std::vector<std::string>>& environmentDirs);
+
+  // Validates and stores one upload; on success the asset is registered and usable in scenes.
+  // On failure `rejection` says why (Error code InvalidArgument/Unsupported -> 400, Internal).
+  Result<AssetRecord> add(const AssetUpload& upload, AssetRejection& rejection);
+
+  // Every asset: built-ins, Blender worlds, uploads; grouped by kind (mesh, texture,
+  // environment), then source in that order, uploads by creation time.
+  std::vector<AssetRecord> list(std::optional<AssetKind> kind = std::nullopt) const;
+  std::optional<AssetRecord> find(const std::string& id) const;
+
+  // The folder of stored uploads: <dataDir>/assets.
+  const std::string& directory() const { return dir_; }
+
+  // Debian blender-data's world folders that exist on this machine.
+  static std::vector<std::string> defaultEnvironmentDirs();
+  // Ids of uploads: [a-z0-9_]+, at most 64 characters.
+  static bool validId(std::string_view id);
+
+ private:
+  std::string loadOne(const std::string& id);  // "" on success, else why it was skipped
+  void loadEnvironmentDir(const std::string& dir, std::vector<std::string>& log);
+  std::string newId(AssetKind kind) const;     // under mutex_
+
+  std::shared_ptr<Renderer> renderer_;
+  std::string dir_;
+  AssetStoreLimits limits_;
+  RenderSlots& slots_;
+
+  mutable std::mutex mutex_;
+  std::map<std::string, AssetRecord> uploads_;  // by id
+  std::map<std::string, AssetRecord> blender_;  // by name
+  size_t reserved_ = 0;          // uploads being written (count toward the cap)
+  uint64_t reservedBytes_ = 0;
+  uint64_t storedBytes_ = 0;
+};
+
+// The JSON of an asset as GET /api/assets answers it (also what <id>.json holds, for uploads).
+nlohmann::json assetToJson(const AssetRecord& record);
+
+// Display form of a client's file name: the last path component, control characters and
+// invalid UTF-8 removed, at most 128 bytes; "" when nothing is left.
+std::string sanitizeUploadFileName(std::string_view raw);
+
+}  // namespace brdfa::server
