@@ -47,15 +47,15 @@ void registerSystemRoutes(httplib::Server& server, Service& service) {
   // Responses httplib makes by itself (unknown route, 413, 414, ...) get the JSON error body;
   // responses a handler already filled pass through untouched.
   server.set_error_handler(
-      httplib::Server::HandlerWithResponse([](const httplib::Request& req, httplib::Response& res) {
+      httplib::Server::HandlerWithResponse([&service](const httplib::Request& req, httplib::Response& res) {
         if (!res.body.empty() || res.content_provider_) return httplib::Server::HandlerResponse::Unhandled;
         std::string message;
         switch (res.status) {
           case 404:
             message = "no such resource: " + req.method + " " + req.path;
             break;
-          case 413:
-            message = "request body is larger than " + std::to_string(kMaxJsonBody) + " bytes";
+          case 413:  // only httplib's own limit gets here: the largest body any route takes (an upload)
+            message = "request body is larger than " + std::to_string(service.maxRequestBody()) + " bytes";
             break;
           default:
             message = "HTTP " + std::to_string(res.status) + " for " + req.method + " " + req.path;

@@ -151,9 +151,12 @@ bool contains(const std::vector<std::string>& names, const std::string& name) {
   return std::find(names.begin(), names.end(), name) != names.end();
 }
 
+// The names for an error message; with hundreds of uploads, the first 24 and a count.
 std::string joinNames(const std::vector<std::string>& names) {
+  constexpr size_t kListed = 24;
   std::string out;
-  for (const std::string& n : names) out += (out.empty() ? "" : ", ") + n;
+  for (size_t i = 0; i < names.size() && i < kListed; ++i) out += (out.empty() ? "" : ", ") + names[i];
+  if (names.size() > kListed) out += ", and " + std::to_string(names.size() - kListed) + " more (GET /api/assets)";
   return out;
 }
 
