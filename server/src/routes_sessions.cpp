@@ -21,6 +21,7 @@ nlohmann::json statsToJson(const FrameStats& s, const std::optional<Error>& rend
                      {"fps", s.lastPassMs > 0 ? 1000.0 / s.lastPassMs : 0.0},
                      {"vertices", s.vertices},
                      {"triangles", s.triangles},
+                     {"program_bytes", s.programBytes},
                      {"rel_error", nullptr},
                      {"nan_samples", s.nanSamples},
                      {"passes", s.passes},
