@@ -8,7 +8,7 @@ set -eu
 PACKAGES="build-essential cmake pkg-config \
 libvulkan-dev mesa-vulkan-drivers glslang-dev glslang-tools \
 libglm-dev libtinyobjloader-dev libcpp-httplib-dev libssl-dev libbrotli-dev zlib1g-dev \
-nlohmann-json3-dev libstb-dev libtinyexr-dev libgtest-dev"
+nlohmann-json3-dev libstb-dev libtinyexr-dev libopenexr-dev libgtest-dev"
 
 # Wanted but not required: blender-data ships eight CC0 equirectangular EXR worlds that the
 # server offers as environments blender_<name> when present (issue 4). Tried once per machine.

@@ -29,7 +29,6 @@ constexpr size_t kMaxMetadataBytes = 64 * 1024;
 constexpr std::chrono::seconds kInspectSlotWait{30};
 // Limits for the environment folders' files (the system's, not a client's).
 constexpr uint64_t kMaxSystemAssetBytes = 1ull << 30;
-constexpr AssetLimits kSystemAssetLimits{kMaxSystemAssetBytes, 0, 1ull << 28};
 constexpr AssetKind kKinds[] = {AssetKind::Mesh, AssetKind::Texture, AssetKind::Environment};
 
 std::string lower(std::string_view s) {
@@ -355,16 +354,18 @@ void AssetStore::loadEnvironmentDir(const std::string& dir, std::vector<std::str
                     (name.empty() ? "no usable name" : "'" + name + "' already registered") + ")");
       continue;
     }
-    // Checked like an upload (generous limits: these are the system's own files), so that only
-    // worlds the renderer can read are offered.
+    // Only sniffed here, decoded when a scene first uses it: a full decode and cube conversion
+    // costs ~250 ms a world, and start-up must not grow with what is installed. A world that
+    // turns out unreadable then fails that scene with the decoder's reason, naming the world.
     std::optional<std::string> bytes = readSmallFile(file, kMaxSystemAssetBytes, /*followLinks=*/true);
-    Result<AssetInfo> info = bytes ? inspectAsset(*bytes, AssetKind::Environment, kSystemAssetLimits)
-                                   : Result<AssetInfo>(makeError(ErrorCode::InvalidArgument,
-                                                                 "unreadable, or larger than " +
-                                                                     std::to_string(kMaxSystemAssetBytes) + " bytes"));
+    std::optional<AssetFormat> format = bytes ? sniffAssetFormat(*bytes) : std::nullopt;
     Result<void> registered =
-        info ? renderer_->registerAsset(name, AssetKind::Environment, fs::absolute(file, ec).string())
-             : Result<void>(info.error());
+        format == AssetFormat::Exr
+            ? renderer_->registerAsset(name, AssetKind::Environment, fs::absolute(file, ec).string())
+            : Result<void>(makeError(ErrorCode::InvalidArgument,
+                                     bytes ? "not an EXR file"
+                                           : "unreadable, or larger than " + std::to_string(kMaxSystemAssetBytes) +
+                                                 " bytes"));
     if (!registered) {
       log.push_back("warning: environment " + file.string() + " (" + name + ") skipped: " + registered.error().message);
       continue;
@@ -373,11 +374,9 @@ void AssetStore::loadEnvironmentDir(const std::string& dir, std::vector<std::str
     rec.id = name;
     rec.kind = AssetKind::Environment;
     rec.source = kSourceBlender;
-    rec.format = info->format;
-    rec.layout = info->layout;
+    rec.format = AssetFormat::Exr;
+    rec.layout = "equirect";
     rec.bytes = bytes->size();
-    rec.width = info->width;
-    rec.height = info->height;
     std::lock_guard lock(mutex_);
     blender_[name] = std::move(rec);
   }
