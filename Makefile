@@ -7,7 +7,7 @@ BUILD ?= build
 BUILD_TYPE ?= RelWithDebInfo
 JOBS ?= $(shell nproc)
 
-.PHONY: all deps build run test bench sanitize clean
+.PHONY: all deps web build run test bench sanitize clean
 
 all: build
 
@@ -17,13 +17,25 @@ deps:
 $(BUILD)/CMakeCache.txt: | deps
 	cmake -S . -B $(BUILD) -DCMAKE_BUILD_TYPE=$(BUILD_TYPE)
 
-build: deps $(BUILD)/CMakeCache.txt
+build: deps web $(BUILD)/CMakeCache.txt
 	cmake --build $(BUILD) -j $(JOBS)
+
+# The browser UI: npm packages (CodeMirror, esbuild, playwright-core) from web/package-lock.json,
+# bundled by web/build.mjs into web/dist/ (ignored, never committed). Both steps re-run only when
+# their inputs changed: `npm ci` when the lock file did, esbuild when a source did.
+WEB_SOURCES := web/build.mjs $(shell find web/src -name '*.js' 2>/dev/null)
+web: web/dist/main.js
+
+web/node_modules/.package-lock.json: web/package.json web/package-lock.json | deps
+	cd web && npm ci --no-audit --no-fund
+
+web/dist/main.js: web/node_modules/.package-lock.json $(WEB_SOURCES)
+	cd web && node build.mjs
 
 run: build
 	$(BUILD)/server/brdfa-server --host $(HOST) --port $(PORT)
 
-test: build
+test: build web
 	cd $(BUILD) && ctest --output-on-failure -j 1
 
 bench: build

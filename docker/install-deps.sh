@@ -8,7 +8,8 @@ set -eu
 PACKAGES="build-essential cmake pkg-config \
 libvulkan-dev mesa-vulkan-drivers glslang-dev glslang-tools \
 libglm-dev libtinyobjloader-dev libcpp-httplib-dev libssl-dev libbrotli-dev zlib1g-dev \
-nlohmann-json3-dev libstb-dev libtinyexr-dev libopenexr-dev libgtest-dev"
+nlohmann-json3-dev libstb-dev libtinyexr-dev libopenexr-dev libgtest-dev \
+nodejs npm chromium"
 
 # Wanted but not required: blender-data ships eight CC0 equirectangular EXR worlds that the
 # server offers as environments blender_<name> when present (issue 4). Tried once per machine.
@@ -16,6 +17,17 @@ OPTIONAL="blender-data"
 OPTIONAL_STAMP=/var/lib/brdfa-optional-packages-tried
 
 installed() { dpkg-query -W -f='${Status}' "$1" 2>/dev/null | grep -q "install ok installed"; }
+
+# The web UI's build and browser tests need node, npm and chromium (web/package.json). A
+# NodeSource `nodejs` bundles npm and conflicts with Debian's `npm` package: a working command
+# counts as installed, so the script never tries to replace one Node.js with another.
+present() {
+  case "$1" in
+    nodejs) command -v node >/dev/null 2>&1 ;;
+    npm) command -v npm >/dev/null 2>&1 ;;
+    *) return 1 ;;
+  esac
+}
 
 try_optional() {
   [ "$(id -u)" = "0" ] && [ "${1:-}" != "--print" ] || return 0
@@ -31,7 +43,7 @@ try_optional() {
 
 missing=""
 for p in $PACKAGES; do
-  if ! installed "$p"; then
+  if ! installed "$p" && ! present "$p"; then
     missing="$missing $p"
   fi
 done

@@ -1,0 +1,51 @@
+// The one module that talks to the network (DESIGN.md section 7). Everything else calls these
+// functions and never builds a URL or calls fetch itself. Endpoints: docs/api.md.
+
+/** An HTTP error with the server's JSON body ({error, message, field?, diagnostics?}). */
+export class ApiError extends Error {
+  constructor(status, body) {
+    super((body && body.message) || `HTTP ${status}`);
+    this.status = status;
+    this.body = body || {};
+  }
+}
+
+async function request(method, path, { json, text } = {}) {
+  const init = { method, headers: {} };
+  if (json !== undefined) {
+    init.headers['Content-Type'] = 'application/json';
+    init.body = JSON.stringify(json);
+  } else if (text !== undefined) {
+    init.headers['Content-Type'] = 'text/plain; charset=utf-8';
+    init.body = text;
+  }
+  const res = await fetch(path, init);
+  if (res.status === 204) return null;
+  const type = res.headers.get('Content-Type') || '';
+  const body = type.includes('application/json') ? await res.json() : await res.text();
+  if (!res.ok) throw new ApiError(res.status, typeof body === 'object' ? body : { message: body });
+  return body;
+}
+
+const seg = encodeURIComponent;
+
+export const health = () => request('GET', '/api/health');
+
+export const listBrdfs = () => request('GET', '/api/brdfs');
+export const getBrdf = (name) => request('GET', `/api/brdfs/${seg(name)}`);
+export const validateBrdf = (source) => request('POST', '/api/brdfs/validate', { text: source });
+/** Compiles and stores; 422 with `diagnostics` on a compile error (nothing stored then). */
+export const putBrdf = (name, source) => request('PUT', `/api/brdfs/${seg(name)}`, { text: source });
+
+/** 201 {id, scene}. `scene` is optional (all defaults). */
+export const createSession = (scene) => request('POST', '/api/sessions', scene === undefined ? {} : { json: scene });
+/** 200 {id, stats, stream_clients, scene}; 404 when the server forgot it (restart). */
+export const getSession = (session) => request('GET', `/api/sessions/${seg(session)}`);
+
+export const getScene = (session) => request('GET', `/api/sessions/${seg(session)}/scene`);
+/** RFC 7386 merge patch; arrays (objects) are replaced whole. Answers the full scene. */
+export const patchScene = (session, patch) => request('PATCH', `/api/sessions/${seg(session)}/scene`, { json: patch });
+export const getStats = (session) => request('GET', `/api/sessions/${seg(session)}/stats`);
+
+/** URL for an <img>: multipart/x-mixed-replace PNG stream. `nonce` forces a reconnect. */
+export const streamUrl = (session, nonce = 0) => `/api/sessions/${seg(session)}/stream?n=${nonce}`;

@@ -1,0 +1,24 @@
+// Sends the latest value only: while a request is in flight, newer values replace each other
+// and the last one goes out when it returns. A slider drag or a held W key produces far more
+// changes than the server can apply; this keeps one PATCH in flight and never queues stale ones.
+export function coalesce(send) {
+  let pending;        // latest value not sent yet
+  let has = false;
+  let busy = false;
+  const pump = async () => {
+    while (has) {
+      const value = pending;
+      has = false;
+      busy = true;
+      try { await send(value); } catch { /* send() reports its own errors */ }
+      busy = false;
+    }
+  };
+  const push = (value) => {
+    pending = value;
+    has = true;
+    if (!busy) pump();
+  };
+  push.idle = () => !busy && !has;
+  return push;
+}

@@ -1,0 +1,25 @@
+// One state object and its events (three.js editor style, DESIGN.md section 7): panels never
+// call each other; they read `state`, change it with set(), and listen with on(key, fn). Every
+// key of a set() call fires that key's listeners once, after all keys are assigned.
+export const state = {
+  session: null,      // this tab's session id (never 'default')
+  scene: null,        // the session's full scene JSON, as the server last answered it
+  stats: null,        // latest GET /stats reply
+  health: null,       // GET /api/health reply (device name)
+  brdf: null,         // the BRDF objects[0] uses: {name, params:[{name,type,min,max,default}]}
+  diagnostics: [],    // latest compile diagnostics [{line, column, severity, message}]
+  status: '',         // one line for the user
+  speeds: { move: 1.5, look: 0.25 },  // camera: units per second, degrees per pixel (UI only)
+};
+
+const listeners = new Map();
+
+export function on(key, fn) {
+  if (!listeners.has(key)) listeners.set(key, []);
+  listeners.get(key).push(fn);
+}
+
+export function set(changes) {
+  Object.assign(state, changes);
+  for (const key of Object.keys(changes)) for (const fn of listeners.get(key) || []) fn(state);
+}
