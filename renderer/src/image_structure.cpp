@@ -66,6 +66,24 @@ size_t skipEntropyCodedData(const unsigned char* data, size_t size, size_t pos) 
   return size;
 }
 
+// A DHT segment's tables (`data` after the length field, `length` bytes): each is a class/id
+// byte, 16 code counts and that many symbols. stb_image (Debian's 2.27) copies a table's code
+// lengths into a 257-entry array without checking that the counts sum to at most 256: a
+// crafted table overflows it (a heap write). The JPEG standard allows 256 symbols per table.
+bool validHuffmanTables(const unsigned char* data, size_t length) {
+  size_t pos = 0;
+  while (pos < length) {
+    if (length - pos < 17) return false;
+    const unsigned tableClass = data[pos] >> 4, tableId = data[pos] & 15;
+    if (tableClass > 1 || tableId > 3) return false;
+    size_t symbols = 0;
+    for (size_t i = 1; i <= 16; ++i) symbols += data[pos + i];
+    if (symbols > 256 || symbols > length - pos - 17) return false;
+    pos += 17 + symbols;
+  }
+  return true;
+}
+
 }  // namespace
 
 Result<void> checkJpegStructure(std::string_view bytes) {
@@ -84,6 +102,8 @@ Result<void> checkJpegStructure(std::string_view bytes) {
     size_t length = (size_t(data[pos]) << 8) | data[pos + 1];
     if (length < 2) return corrupt("JPEG", "a segment has an impossible length at byte " + std::to_string(pos));
     if (length > size - pos) break;
+    if (marker == 0xC4 && !validHuffmanTables(data + pos + 2, length - 2))
+      return corrupt("JPEG", "a Huffman table (DHT) at byte " + std::to_string(pos) + " is malformed");
     pos += length;
     if (marker == 0xDA) pos = skipEntropyCodedData(data, size, pos);  // SOS: the scan's data follows
   }

@@ -179,6 +179,13 @@ TEST(ImageDecode, CorruptJpegIsRefused) {
   std::string length = jpeg;
   length[sof + 2] = char(0x7F);
   expectInvalid(decodeTexture(length, AssetLimits{}), "JPEG");
+  // A Huffman table whose 16 code counts sum past the standard's 256 symbols (here 16 x 255):
+  // Debian's stb_image would write past its 257-entry array (seen under AddressSanitizer).
+  std::string huffman = jpeg;
+  size_t dht = huffman.find("\xFF\xC4");
+  ASSERT_NE(dht, std::string::npos);
+  for (size_t i = dht + 5; i < dht + 21; ++i) huffman[i] = char(0xFF);
+  expectInvalid(decodeTexture(huffman, AssetLimits{}), "Huffman");
 }
 
 TEST(BuiltinTextures, NamesAndSizes) {
