@@ -48,7 +48,7 @@ bench: build
 # the driver itself allocates (indirect leaks of its internal objects after many pipelines).
 LVP_ICD := $(firstword $(wildcard /usr/share/vulkan/icd.d/lvp_icd.*.json))
 LVP_LIB = $(shell sed -n 's/.*"library_path": *"\([^"]*\)".*/\1/p' $(LVP_ICD))
-sanitize: deps
+sanitize: deps web
 	cmake -S . -B build-asan -DCMAKE_BUILD_TYPE=Debug -DBRDFA_SANITIZE=ON -DBRDFA_BUILD_BENCH=OFF
 	cmake --build build-asan -j $(JOBS)
 	cd build-asan && LD_PRELOAD=$(LVP_LIB) ASAN_OPTIONS=verify_asan_link_order=0:detect_leaks=1 \
