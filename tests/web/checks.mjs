@@ -164,8 +164,13 @@ export const checks = [
       return still && p;
     });
     assert.ok(Math.abs(p1[0] - p0[0]) < 1e-6 && Math.abs(p1[1] - p0[1]) < 1e-6, 'W moves along -Z at yaw 0, pitch 0');
-    const shown = Number(await page.locator('#camera input[name="pz"]').inputValue());
-    assert.ok(Math.abs(shown - p1[2]) < 0.01, 'the camera panel shows the new position');
+    // On a loaded machine the last PATCH can still be in flight when two reads agree: wait
+    // until the server and the panel agree.
+    await until('the camera panel to show the new position', async () => {
+      const p = (await http(env, 'GET', `/api/sessions/${sid}/scene`)).camera.position;
+      const shown = Number(await page.locator('#camera input[name="pz"]').inputValue());
+      return Math.abs(shown - p[2]) < 0.01;
+    }, 5000);
     await shot(env, page, '05-moved');
   }],
 
@@ -191,6 +196,158 @@ export const checks = [
     await env.page.reload();
     await env.waitForFrame(env.page, { minVariance: 20 });
     assert.equal(new URL(env.page.url()).searchParams.get('session'), env.sid, 'a reload keeps the session');
+  }],
+
+  ['the test window runs a batch: progress reaches 1, results appear, the view keeps rendering', async (env) => {
+    const { page, sid } = env;
+    const names = ['lambert', 'phong', 'ward'];
+    // Uncapped, so the session renders (and streams) new passes for the whole job.
+    await http(env, 'PATCH', `/api/sessions/${sid}/scene`, { render: { max_samples: 1048576 } });
+    await page.bringToFront();   // a background tab's animation frames are throttled
+    await page.click('.tabs [data-tab="tab-test"]');
+    for (const n of names) await page.check(`#tests .test-names input[value="${n}"]`);
+    // In the page: count distinct frames on screen each animation frame from the click until
+    // the progress bar is full.
+    await page.evaluate(() => {
+      const img = document.querySelector('#viewer img');
+      const bar = document.querySelector('#tests .test-progress');
+      const c = document.createElement('canvas');
+      c.width = c.height = 32;
+      const g = c.getContext('2d', { willReadFrequently: true });
+      const sig = () => { g.drawImage(img, 0, 0, 32, 32); return g.getImageData(0, 0, 32, 32).data.join(','); };
+      window.__job = { frames: 0, start: performance.now(), end: 0, progress: [] };
+      let last = sig();
+      const tick = () => {
+        const s = sig();
+        if (s !== last) { window.__job.frames++; last = s; }
+        const p = Number(bar.value);
+        if (window.__job.progress.at(-1) !== p) window.__job.progress.push(p);
+        if (p >= 1) { window.__job.end = performance.now(); return; }
+        requestAnimationFrame(tick);
+      };
+      document.querySelector('#tests .test-run').click();
+      requestAnimationFrame(tick);
+    });
+    await until('the progress bar to reach 1', () => page.evaluate(() => window.__job.end > 0), 60000);
+    const job = await page.evaluate(() => window.__job);
+    const rows = await page.locator('#tests .test-results tbody tr').allTextContents();
+    assert.equal(rows.length, 3, 'one result row per BRDF');
+    for (const [i, n] of names.entries()) assert.ok(rows[i].startsWith(n), `row ${i} is ${n}: ${rows[i]}`);
+    const cells = await page.locator('#tests .test-results tbody tr:first-child td').allTextContents();
+    assert.equal(cells[1], 'yes', 'lambert passes');
+    assert.ok(Number.isFinite(parseFloat(cells[3])), `compile ms shown: ${cells[3]}`);
+    assert.match(await page.locator('#tests .test-status').textContent(), /^done: 3\/3/);
+    assert.match(await page.locator('#tests .test-log').textContent(), /^lambert:/, 'the first log is shown');
+    console.log(`TIMING test window: 3 BRDFs in ${(job.end - job.start).toFixed(0)} ms, ` +
+      `${job.frames} new frames on screen meanwhile, progress ${job.progress.join(' -> ')}`);
+    assert.ok(job.frames >= 2, `the stream kept delivering frames during the job (${job.frames})`);
+    await shot(env, page, '07-test-window');
+    await page.click('.tabs [data-tab="tab-editor"]');
+    await capSamples(env, sid);
+  }],
+
+  ['the frame saver downloads PNG, PFM and EXR', async (env) => {
+    const { page, sid } = env;
+    for (const [fmt, magic] of [['png', '\x89PNG'], ['pfm', 'PF'], ['exr', 'v/1\x01']]) {
+      const href = await page.locator(`#frame-saver .save-${fmt}`).getAttribute('href');
+      assert.ok(href.includes(`/api/sessions/${sid}/frame`) && href.includes(`format=${fmt}`) && href.includes('download=1'), href);
+      const got = await page.evaluate(async (href) => {
+        const r = await fetch(href);
+        const b = new Uint8Array(await r.arrayBuffer());
+        return { status: r.status, cd: r.headers.get('Content-Disposition'), head: String.fromCharCode(...b.slice(0, 4)) };
+      }, href);
+      assert.equal(got.status, 200);
+      assert.match(got.cd || '', new RegExp(`attachment; filename="${sid}-\\d+spp\\.${fmt}"`));
+      assert.ok(got.head.startsWith(magic), `${fmt} file starts with its magic (${JSON.stringify(got.head)})`);
+    }
+  }],
+
+  ['Save as stores a named BRDF; presets save and load; a parameter resets alone', async (env) => {
+    const { page, sid } = env;
+    await page.bringToFront();
+    page.once('dialog', (d) => d.accept('ui_saved'));
+    await page.click('#library .lib-saveas');
+    await until('the scene to use ui_saved', async () =>
+      (await http(env, 'GET', `/api/sessions/${sid}/scene`)).objects[0].brdf === 'ui_saved');
+    const saved = await http(env, 'GET', '/api/brdfs/ui_saved');
+    assert.equal(saved.builtin, false);
+    await until('the library to list it', async () => (await page.locator('#library .library-list').inputValue()) === 'ui_saved');
+    assert.equal(await page.locator('#library .lib-delete').isDisabled(), false, 'a user BRDF can be deleted');
+
+    await moveSlider(env, page, sid, 'roughness', 0.7);
+    page.once('dialog', (d) => d.accept('rough07'));
+    await page.click('#params .preset-save');
+    await until('the preset to be stored', async () =>
+      (await http(env, 'GET', '/api/brdfs/ui_saved/presets')).includes('rough07'));
+    assert.ok(Math.abs((await http(env, 'GET', '/api/brdfs/ui_saved/presets/rough07')).roughness - 0.7) < 0.002);
+
+    const decl = saved.params.find((p) => p.name === 'roughness');
+    await page.click('#params .param:has(input[name="roughness"]) .param-reset');
+    await until('roughness back to its default', async () =>
+      Math.abs((await http(env, 'GET', `/api/sessions/${sid}/scene`)).objects[0].params.roughness - decl.default) < 1e-6);
+    await page.selectOption('#params .preset-list', 'rough07');
+    await page.click('#params .preset-load');
+    await until('the preset applied', async () =>
+      Math.abs((await http(env, 'GET', `/api/sessions/${sid}/scene`)).objects[0].params.roughness - 0.7) < 0.002);
+    await shot(env, page, '08-saved-preset');
+  }],
+
+  ['the objects panel adds and removes objects (one always stays)', async (env) => {
+    const { page, sid } = env;
+    await page.click('.tabs [data-tab="tab-objects"]');
+    assert.equal(await page.locator('#objects .obj-remove').isDisabled(), true, 'the only object cannot be removed');
+    await page.click('#objects .obj-add');
+    await until('two objects', async () => (await http(env, 'GET', `/api/sessions/${sid}/scene`)).objects.length === 2);
+    await page.selectOption('#objects .obj-mesh', 'cube');
+    await until('the second object to be a cube', async () =>
+      (await http(env, 'GET', `/api/sessions/${sid}/scene`)).objects[1].mesh === 'cube');
+    await shot(env, page, '09-objects');
+    await page.click('#objects .obj-remove');
+    await until('one object', async () => (await http(env, 'GET', `/api/sessions/${sid}/scene`)).objects.length === 1);
+    assert.equal(await page.locator('#objects .obj-remove').isDisabled(), true);
+    await page.click('.tabs [data-tab="tab-editor"]');
+  }],
+
+  ['the environment panel chooses an environment, intensity, rotation and visibility', async (env) => {
+    const { page, sid } = env;
+    await page.click('.tabs [data-tab="tab-environment"]');
+    const envNow = async () => (await http(env, 'GET', `/api/sessions/${sid}/scene`)).environment;
+    await page.selectOption('#environment .env-name', 'studio');
+    await until('studio', async () => (await envNow()).name === 'studio');
+    await page.fill('#environment .env-intensity', '2');
+    await page.press('#environment .env-intensity', 'Enter');
+    await page.fill('#environment .env-rotation', '90');
+    await page.press('#environment .env-rotation', 'Enter');
+    await page.uncheck('#environment .env-visible');
+    await until('intensity 2, rotation 90, hidden background', async () => {
+      const e = await envNow();
+      return e.intensity === 2 && e.rotation === 90 && e.visible === false;
+    });
+    await shot(env, page, '10-environment');
+    await page.click('.tabs [data-tab="tab-editor"]');
+  }],
+
+  ['a hidden tab closes its stream and stops polling stats; showing it resumes', async (env) => {
+    const page = env.page2;
+    const sid = new URL(page.url()).searchParams.get('session');
+    await http(env, 'PATCH', `/api/sessions/${sid}/scene`, { render: { max_samples: 1048576 } });   // frames flow
+    await until('a stream client', async () => (await http(env, 'GET', `/api/sessions/${sid}`)).stream_clients >= 1);
+    const setHidden = (hidden) => page.evaluate((hidden) => {
+      Object.defineProperty(document, 'visibilityState', { configurable: true, get: () => (hidden ? 'hidden' : 'visible') });
+      document.dispatchEvent(new Event('visibilitychange'));
+    }, hidden);
+    await setHidden(true);
+    await until('the stream to close', async () => (await http(env, 'GET', `/api/sessions/${sid}`)).stream_clients === 0);
+    const polls = () => page.evaluate(() => performance.getEntriesByType('resource').filter((r) => r.name.includes('/stats')).length);
+    await sleep(300);
+    const n0 = await polls();
+    await sleep(1500);
+    assert.equal(await polls(), n0, 'no stats requests while hidden');
+    assert.match(await page.locator('#viewer .overlay').textContent(), /paused/);
+    await setHidden(false);
+    await until('the stream to reconnect', async () => (await http(env, 'GET', `/api/sessions/${sid}`)).stream_clients >= 1);
+    await until('stats polled again', async () => (await polls()) > n0);
+    await capSamples(env, sid);
   }],
 
   ['no console errors', async (env) => {

@@ -10,9 +10,11 @@ export class ApiError extends Error {
   }
 }
 
-async function request(method, path, { json, text } = {}) {
+async function request(method, path, { json, text, form } = {}) {
   const init = { method, headers: {} };
-  if (json !== undefined) {
+  if (form !== undefined) {
+    init.body = form;   // FormData: the browser sets the multipart Content-Type and boundary
+  } else if (json !== undefined) {
     init.headers['Content-Type'] = 'application/json';
     init.body = JSON.stringify(json);
   } else if (text !== undefined) {
@@ -36,6 +38,29 @@ export const getBrdf = (name) => request('GET', `/api/brdfs/${seg(name)}`);
 export const validateBrdf = (source) => request('POST', '/api/brdfs/validate', { text: source });
 /** Compiles and stores; 422 with `diagnostics` on a compile error (nothing stored then). */
 export const putBrdf = (name, source) => request('PUT', `/api/brdfs/${seg(name)}`, { text: source });
+/** 204; 409 for a built-in. Removes the BRDF's presets too. */
+export const deleteBrdf = (name) => request('DELETE', `/api/brdfs/${seg(name)}`);
+
+// Presets: named parameter sets of one BRDF.
+export const listPresets = (brdf) => request('GET', `/api/brdfs/${seg(brdf)}/presets`);
+export const getPreset = (brdf, preset) => request('GET', `/api/brdfs/${seg(brdf)}/presets/${seg(preset)}`);
+export const putPreset = (brdf, preset, values) => request('PUT', `/api/brdfs/${seg(brdf)}/presets/${seg(preset)}`, { json: values });
+export const deletePreset = (brdf, preset) => request('DELETE', `/api/brdfs/${seg(brdf)}/presets/${seg(preset)}`);
+
+// Batch test jobs (the Test window). `names`: an array of BRDF names, or 'all'.
+export const startValidateJob = (names) =>
+  request('POST', '/api/jobs/validate', { json: names === 'all' ? { all: true } : { names } });
+export const getJob = (id) => request('GET', `/api/jobs/${seg(id)}`);
+
+// Assets: meshes, textures, environments (built-ins and uploads).
+export const listAssets = (kind) => request('GET', kind ? `/api/assets?kind=${seg(kind)}` : '/api/assets');
+/** multipart upload of a File; `kind` optional ('' = from the content). 201 the asset. */
+export const uploadAsset = (file, kind = '') => {
+  const form = new FormData();
+  form.append('file', file, file.name);
+  if (kind) form.append('kind', kind);
+  return request('POST', '/api/assets', { form });
+};
 
 /** 201 {id, scene}. `scene` is optional (all defaults). */
 export const createSession = (scene) => request('POST', '/api/sessions', scene === undefined ? {} : { json: scene });
@@ -49,3 +74,6 @@ export const getStats = (session) => request('GET', `/api/sessions/${seg(session
 
 /** URL for an <img>: multipart/x-mixed-replace PNG stream. `nonce` forces a reconnect. */
 export const streamUrl = (session, nonce = 0) => `/api/sessions/${seg(session)}/stream?n=${nonce}`;
+/** URL that downloads the current frame (`png`, `pfm` or `exr`) as an attachment. */
+export const frameDownloadUrl = (session, format) =>
+  `/api/sessions/${seg(session)}/frame?format=${seg(format)}&min_spp=0&download=1`;

@@ -2,7 +2,6 @@
 // session and loads the BRDF its first object uses. Panels only meet through state.js.
 // The editor (CodeMirror) is a dynamic import: the session and its stream start without
 // waiting for it, so the first frame is on screen sooner.
-import * as api from './api.js';
 import { state, set } from './state.js';
 import { startSession, mountSessionPanel } from './panels/session.js';
 import { mountViewer } from './panels/viewer.js';
@@ -10,15 +9,29 @@ import { mountCamera } from './panels/camera.js';
 import { mountLog } from './panels/log.js';
 import { mountParams } from './panels/params.js';
 import { startStatsPolling } from './stats.js';
+import { mountTabs } from './panels/tabs.js';
+import { mountTests } from './panels/tests.js';
+import { mountFrameSaver } from './panels/frame-saver.js';
+import { mountObjects } from './panels/objects.js';
+import { mountEnvironment } from './panels/environment.js';
+import { refreshLibrary, refreshAssets } from './library.js';
 
 const $ = (id) => document.getElementById(id);
+const visibility = () => set({ visible: document.visibilityState === 'visible' });
+document.addEventListener('visibilitychange', visibility);
+visibility();
 
 mountSessionPanel($('session'));
 mountViewer($('viewer'));
 mountCamera($('viewer'), $('camera'));
 mountLog($('log'));
 mountParams($('params'));
-const editor = import('./panels/editor.js').then((m) => m.mountEditor($('editor')));
+mountTabs(document.querySelector('.tabs'));
+mountTests($('tests'));
+mountFrameSaver($('frame-saver'));
+mountObjects($('objects'));
+mountEnvironment($('environment'));
+const editor = import('./panels/editor.js').then((m) => m.mountEditor($('editor'), $('library')));
 
 (async () => {
   try {
@@ -26,10 +39,9 @@ const editor = import('./panels/editor.js').then((m) => m.mountEditor($('editor'
     startStatsPolling();
     const name = state.scene.objects?.[0]?.brdf;
     if (!name) { set({ status: 'the scene has no object' }); return; }
-    const brdf = await api.getBrdf(name);
-    (await editor).load(brdf.source);
-    set({ brdf: { name: brdf.name, params: brdf.params },
-          status: brdf.builtin ? `editing a copy of built-in "${brdf.name}"` : `editing "${brdf.name}"` });
+    refreshLibrary();
+    refreshAssets();
+    await (await editor).openInitial(name);
   } catch (e) {
     set({ status: `start failed: ${e.message}` });
   }

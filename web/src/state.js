@@ -6,9 +6,15 @@ export const state = {
   scene: null,        // the session's full scene JSON, as the server last answered it
   stats: null,        // latest GET /stats reply
   health: null,       // GET /api/health reply (device name)
-  brdf: null,         // the BRDF objects[0] uses: {name, params:[{name,type,min,max,default}]}
+  selected: 0,        // the object the editor and the Parameters panel work on (Objects tab)
+  brdf: null,         // the BRDF objects[selected] uses: {name, params:[{name,type,min,max,default}]}
   diagnostics: [],    // latest compile diagnostics [{line, column, severity, message}]
   status: '',         // one line for the user
+  library: [],        // GET /api/brdfs (sorted by name), refreshed after a save or delete
+  editing: null,      // what the editor holds: {name (null: untitled/scratch), builtin, source (stored text)}
+  assets: null,       // GET /api/assets, refreshed after an upload
+  tab: '',            // the right-hand column's page (tabs.js)
+  visible: document.visibilityState === 'visible',   // document.visibilityState === 'visible': a hidden tab pauses stream and stats
   speeds: { move: 1.5, look: 0.25 },  // camera: units per second, degrees per pixel (UI only)
 };
 

@@ -2,7 +2,8 @@
 // @codemirror/legacy-modes' clike family: GLSL keywords, types and built-ins; the .brdf
 // `::begin` lines are plain text to it). Compiles on Ctrl+Enter and after a pause in typing;
 // the server's 422 diagnostics become lint markers in the gutter and messages on their lines.
-// A successful compile is stored as this session's scratch BRDF and objects[0] switches to it.
+// A successful compile is stored as this session's scratch BRDF and the selected object
+// (state.selected, objects[0] unless the Objects tab chose another) switches to it.
 import { EditorView, basicSetup } from 'codemirror';
 import { keymap } from '@codemirror/view';
 import { Prec, Transaction } from '@codemirror/state';
@@ -11,6 +12,7 @@ import { shader } from '@codemirror/legacy-modes/mode/clike';
 import { setDiagnostics, lintGutter } from '@codemirror/lint';
 import * as api from '../api.js';
 import { state, set, on } from '../state.js';
+import { refreshLibrary, NAME_RE } from '../library.js';
 
 const IDLE_MS = 800;   // a pause in typing this long compiles
 
@@ -39,12 +41,40 @@ function keptParams(old, decls) {
   return out;
 }
 
-export function mountEditor(el) {
+// What New starts from: one parameter of each kind and a Lambert + Blinn-Phong lobe.
+export const TEMPLATE = `analytic
+# my_brdf: describe the model and cite its source here.
+
+::begin parameters
+color albedo 0.8 0.8 0.8   # diffuse colour
+float shininess 1 500 40   # highlight exponent
+float ks 0 1 0.2           # highlight strength
+bool highlight 1           # draw the highlight
+::end parameters
+
+::begin shader
+const float PI = 3.14159265358979323846;
+
+vec3 BRDF(vec3 L, vec3 V, vec3 N, vec3 X, vec3 Y)
+{
+    if (dot(N, L) <= 0.0 || dot(N, V) <= 0.0) return vec3(0.0);
+    vec3 f = albedo / PI;
+    if (highlight) {
+        vec3 H = normalize(L + V);
+        f += vec3(ks * (shininess + 8.0) / (8.0 * PI) * pow(max(dot(N, H), 0.0), shininess));
+    }
+    return f;
+}
+::end shader
+`;
+
+export function mountEditor(el, libEl) {
   const list = el.querySelector('.diagnostics');
   const status = el.querySelector('.status');
   let idle = 0;
   let busy = false;
   let again = false;
+  let stored = null;        // the text the server last accepted (scratch or a saved name)
 
   const view = new EditorView({
     parent: el.querySelector('.editor-host'),
@@ -55,6 +85,7 @@ export function mountEditor(el) {
       Prec.highest(keymap.of([{ key: 'Mod-Enter', run: () => { compile(); return true; } }])),
       EditorView.updateListener.of((u) => {
         // Only the user's edits start the idle timer, not loading a BRDF's source.
+        if (u.docChanged) queueMicrotask(showLibrary);   // the "unsaved changes" mark
         if (!u.docChanged || !u.transactions.some((tr) => tr.annotation(Transaction.userEvent))) return;
         clearTimeout(idle);
         idle = setTimeout(compile, IDLE_MS);
@@ -72,9 +103,11 @@ export function mountEditor(el) {
     set({ status: 'compiling…' });
     try {
       const brdf = await api.putBrdf(name, source);
-      const params = keptParams(state.scene.objects[0]?.params, brdf.params);
-      const objects = state.scene.objects.map((o, i) => (i === 0 ? { ...o, brdf: name, params } : o));
+      const sel = state.selected;
+      const params = keptParams(state.scene.objects[sel]?.params, brdf.params);
+      const objects = state.scene.objects.map((o, i) => (i === sel ? { ...o, brdf: name, params } : o));
       const scene = await api.patchScene(state.session, { objects });
+      stored = source;
       set({ scene, brdf: { name, params: brdf.params }, diagnostics: brdf.warnings || [],
             status: brdf.cached ? 'compiled (cached)' : `compiled in ${brdf.compile_ms.toFixed(0)} ms` });
     } catch (e) {
@@ -99,10 +132,147 @@ export function mountEditor(el) {
   on('status', ({ status: s }) => { status.textContent = s; });
   el.querySelector('.compile').addEventListener('click', compile);
 
+  // ---- library: open, New, Save, Save as, Revert, Delete ----
+  const $ = (c) => libEl.querySelector(c);
+  const select = $('.library-list');
+  const text = () => view.state.doc.toString();
+  /** Differs from the version saved under a name (or, untitled, from what it started as). */
+  const unsaved = () => state.editing && text() !== state.editing.source;
+  const okToDiscard = () => !unsaved() || confirm('The editor has unsaved changes. Discard them?');
+  const load = (source) => view.dispatch({ changes: { from: 0, to: view.state.doc.length, insert: source } });
+
+  function showLibrary() {
+    const cur = state.editing?.name;
+    const opts = state.library.map((b) => {
+      const o = document.createElement('option');
+      o.value = b.name;
+      o.textContent = `${b.name}${b.builtin ? ' (built-in)' : ''}${b.broken ? ' (broken)' : ''}`;
+      return o;
+    });
+    if (!cur || !state.library.some((b) => b.name === cur)) {
+      const o = document.createElement('option');
+      o.value = '';
+      o.textContent = '(untitled)';
+      opts.unshift(o);
+    }
+    select.replaceChildren(...opts);
+    select.value = cur && state.library.some((b) => b.name === cur) ? cur : '';
+    const e = state.editing;
+    $('.lib-save').disabled = !e?.name || e.builtin;
+    $('.lib-delete').disabled = !e?.name || e.builtin;
+    $('.library-state').textContent = !e ? '' : (e.builtin ? 'read-only: Save as makes a copy' : '') +
+      (unsaved() ? ' · unsaved changes' : '');
+  }
+  on('library', showLibrary);
+  on('editing', showLibrary);
+  // Leaving loses only text the server never got (scratch compiles are stored).
+  window.addEventListener('beforeunload', (ev) => {
+    if (stored !== null && text() !== stored) { ev.preventDefault(); ev.returnValue = ''; }
+  });
+
+  /** The selected object switches to `name` (kept parameter values that still fit). */
+  async function useForObject(name, params) {
+    const sel = state.selected;
+    const kept = keptParams(state.scene.objects[sel]?.params, params);
+    const objects = state.scene.objects.map((o, i) => (i === sel ? { ...o, brdf: name, params: kept } : o));
+    set({ scene: await api.patchScene(state.session, { objects }), brdf: { name, params } });
+  }
+
+  /** Opens a library BRDF: its text in the editor, and the selected object renders it. */
+  async function open(name, { apply = true } = {}) {
+    const b = await api.getBrdf(name);
+    load(b.source);
+    stored = b.source;
+    const scratch = name === scratchName(state.session);
+    set({ editing: { name: scratch ? null : b.name, builtin: b.builtin, source: b.source }, diagnostics: b.error?.diagnostics || [] });
+    if (b.broken) { set({ status: `"${name}" does not parse: fix it and Save` }); return; }
+    if (apply) await useForObject(b.name, b.params);
+    else set({ brdf: { name: b.name, params: b.params } });
+    set({ status: scratch ? 'editing this tab\'s scratch BRDF (Save as to keep it)'
+      : b.builtin ? `viewing built-in "${b.name}" (read-only: edits compile into a scratch copy)` : `editing "${b.name}"` });
+  }
+
+  select.addEventListener('change', async () => {
+    const name = select.value;
+    if (!name) return;
+    if (!okToDiscard()) { showLibrary(); return; }
+    try { await open(name); } catch (e) { set({ status: `open: ${e.message}` }); showLibrary(); }
+  });
+
+  $('.lib-new').addEventListener('click', () => {
+    if (!okToDiscard()) return;
+    load(TEMPLATE);
+    set({ editing: { name: null, builtin: false, source: TEMPLATE }, status: 'new BRDF from the template (Save as to name it)' });
+    compile();
+  });
+
+  async function saveAs(name) {
+    const source = text();
+    try {
+      const b = await api.putBrdf(name, source);
+      stored = source;
+      set({ editing: { name, builtin: false, source }, diagnostics: b.warnings || [], status: `saved "${name}"` });
+      await useForObject(name, b.params);
+      await refreshLibrary();
+    } catch (e) {
+      if (e.body?.diagnostics) set({ diagnostics: e.body.diagnostics });
+      set({ status: `save: ${e.message}` });
+    }
+  }
+  $('.lib-save').addEventListener('click', () => {
+    const e = state.editing;
+    if (e?.name && !e.builtin) saveAs(e.name);
+  });
+  $('.lib-saveas').addEventListener('click', () => {
+    const suggestion = state.editing?.name ? `${state.editing.name}_copy` : 'my_brdf';
+    const name = prompt('Save as (letters, digits, _ and -, at most 64):', suggestion);
+    if (name == null) return;
+    if (!NAME_RE.test(name) || name === 'inline' || name === 'validate') { set({ status: `"${name}" is not a valid BRDF name` }); return; }
+    const existing = state.library.find((b) => b.name === name);
+    if (existing?.builtin) { set({ status: `"${name}" is a built-in (read-only): choose another name` }); return; }
+    if (existing && !confirm(`Replace the saved BRDF "${name}"?`)) return;
+    saveAs(name);
+  });
+  $('.lib-revert').addEventListener('click', async () => {
+    const e = state.editing;
+    if (!e || !unsaved() || !confirm('Revert to the saved text? Your changes are lost.')) return;
+    if (e.name) { try { await open(e.name); } catch (err) { set({ status: `revert: ${err.message}` }); } return; }
+    load(e.source);
+    compile();
+  });
+  $('.lib-delete').addEventListener('click', async () => {
+    const e = state.editing;
+    if (!e?.name || e.builtin || !confirm(`Delete "${e.name}" and its presets? Objects using it keep rendering a scratch copy.`)) return;
+    try {
+      const users = state.scene.objects.some((o) => o.brdf === e.name);
+      if (users) {   // a scene cannot name a deleted BRDF: move its objects to this tab's scratch copy
+        const scratch = scratchName(state.session);
+        await api.putBrdf(scratch, e.source);
+        const objects = state.scene.objects.map((o) => (o.brdf === e.name ? { ...o, brdf: scratch } : o));
+        set({ scene: await api.patchScene(state.session, { objects }) });
+        if (state.brdf?.name === e.name) set({ brdf: { ...state.brdf, name: scratch } });
+      }
+      await api.deleteBrdf(e.name);
+      set({ editing: { name: null, builtin: false, source: text() }, status: `deleted "${e.name}"` });
+      await refreshLibrary();
+    } catch (err) {
+      set({ status: `delete: ${err.message}` });
+    }
+  });
+
+  // The selected object changed, or switched to another BRDF (the Objects tab): show its text, unless
+  // the user keeps unsaved text.
+  on('brdf', ({ brdf }) => {
+    if (!brdf || brdf.name === scratchName(state.session) || brdf.name === state.editing?.name) return;
+    if (unsaved() && !confirm(`Object ${state.selected + 1} uses "${brdf.name}". Load its text into the editor and discard your changes?`)) return;
+    open(brdf.name, { apply: false }).catch((e) => set({ status: `open: ${e.message}` }));
+  });
+
+  showLibrary();
   return {
     /** Replaces the text without compiling (loading a BRDF). */
-    load(source) {
-      view.dispatch({ changes: { from: 0, to: view.state.doc.length, insert: source } });
-    },
+    load,
+    /** The BRDF the selected object uses at start: shown, not re-applied. */
+    openInitial: (name) => open(name, { apply: false }),
   };
 }

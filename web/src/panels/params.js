@@ -1,27 +1,28 @@
 // Parameters: sliders, colour pickers and check boxes built from the declarations of the BRDF
-// that objects[0] uses (state.brdf.params). Moving one PATCHes objects[0].params: the server
+// that the selected object uses (state.brdf.params; state.selected, chosen in the Objects tab).
+// Moving one PATCHes objects[selected].params: the server
 // applies value-only changes without recompiling, so the frame updates within a pass.
 import * as api from '../api.js';
 import { state, set, on } from '../state.js';
 import { coalesce } from '../coalesce.js';
 import { toHex, fromHex } from '../color.js';
+import { NAME_RE } from '../library.js';
 
-const OBJECT = 0;   // the object this panel edits (the object editor will choose it later)
 
 export function mountParams(el) {
   const list = el.querySelector('.params-list');
   const controls = new Map();   // param name -> {decl, input, readout}
 
   // `objects` is an array: a merge patch replaces it whole, so send every object.
-  const send = coalesce(async (params) => {
-    const objects = state.scene.objects.map((o, i) => (i === OBJECT ? { ...o, params } : o));
+  const send = coalesce(async ({ index, params }) => {
+    const objects = state.scene.objects.map((o, i) => (i === index ? { ...o, params } : o));
     try {
       set({ scene: await api.patchScene(state.session, { objects }) });
     } catch (e) {
       set({ status: `parameters: ${e.message}` });
     }
   });
-  const current = () => ({ ...(state.scene?.objects?.[OBJECT]?.params || {}) });
+  const current = () => ({ ...(state.scene?.objects?.[state.selected]?.params || {}) });
 
   const readValue = (decl, input) => {
     if (decl.type === 'color') return fromHex(input.value);
@@ -55,35 +56,114 @@ export function mountParams(el) {
         input.type = decl.type === 'color' ? 'color' : 'checkbox';
       }
       const readout = document.createElement('output');
-      row.append(name, input, readout);
+      const reset = document.createElement('button');
+      reset.type = 'button';
+      reset.className = 'param-reset';
+      reset.textContent = '↺';
+      reset.title = `reset ${decl.name} to its default`;
+      row.append(name, input, readout, reset);
       list.append(row);
       const c = { decl, input, readout };
+      reset.addEventListener('click', (ev) => {
+        ev.preventDefault();   // inside the <label>: must not toggle a check box
+        showValue(c, decl.default);
+        apply({ ...current(), [decl.name]: decl.default });
+      });
       controls.set(decl.name, c);
       showValue(c, current()[decl.name] ?? decl.default);
       input.addEventListener('input', () => {
         const v = readValue(decl, input);
         showValue(c, v);
-        const params = current();
-        params[decl.name] = v;
-        // Keep the local scene in step so a second control's patch carries this value too.
-        state.scene.objects[OBJECT].params = params;
-        send(params);
+        apply({ ...current(), [decl.name]: v });
       });
     }
     list.hidden = !controls.size;
   }
 
-  on('brdf', build);
+  // Keep the local scene in step so a second control's patch carries this value too.
+  function apply(params) {
+    const index = state.selected;
+    if (!state.scene.objects[index]) return;
+    state.scene.objects[index].params = params;
+    send({ index, params });
+  }
+
+  // ---- presets: named value sets of this BRDF (stored on the server) ----
+  const presetList = el.querySelector('.preset-list');
+  const presetBox = el.querySelector('.presets');
+  async function loadPresets(select = '') {
+    const name = state.brdf?.name;
+    presetBox.hidden = !name || name.startsWith('scratch-');   // a scratch BRDF is per tab: save it first
+    if (presetBox.hidden) return;
+    try {
+      const names = await api.listPresets(name);
+      const opts = ['', ...names].map((n) => {
+        const o = document.createElement('option');
+        o.value = n;
+        o.textContent = n || '(none)';
+        return o;
+      });
+      presetList.replaceChildren(...opts);
+      presetList.value = select;
+    } catch (e) {
+      set({ status: `presets: ${e.message}` });
+    }
+  }
+  el.querySelector('.preset-load').addEventListener('click', async () => {
+    const p = presetList.value;
+    if (!p) return;
+    try {
+      const values = await api.getPreset(state.brdf.name, p);
+      const params = current();
+      for (const [k, v] of Object.entries(values)) if (controls.has(k)) { params[k] = v; showValue(controls.get(k), v); }
+      apply(params);
+      set({ status: `preset "${p}" loaded` });
+    } catch (e) {
+      set({ status: `preset: ${e.message}` });
+    }
+  });
+  el.querySelector('.preset-save').addEventListener('click', async () => {
+    const p = prompt('Preset name (letters, digits, _ and -, at most 64):', presetList.value || 'preset1');
+    if (p == null) return;
+    if (!NAME_RE.test(p)) { set({ status: `"${p}" is not a valid preset name` }); return; }
+    const values = {};
+    for (const name of controls.keys()) values[name] = current()[name];
+    try {
+      await api.putPreset(state.brdf.name, p, values);
+      await loadPresets(p);
+      set({ status: `preset "${p}" saved` });
+    } catch (e) {
+      set({ status: `preset: ${e.message}` });
+    }
+  });
+  el.querySelector('.preset-delete').addEventListener('click', async () => {
+    const p = presetList.value;
+    if (!p || !confirm(`Delete preset "${p}"?`)) return;
+    try {
+      await api.deletePreset(state.brdf.name, p);
+      await loadPresets();
+    } catch (e) {
+      set({ status: `preset: ${e.message}` });
+    }
+  });
+
+  on('brdf', (s) => { build(s); loadPresets(); });
+  const title = el.querySelector('.params-head strong');
+  const showTitle = () => {
+    const n = state.scene?.objects?.length || 0;
+    title.textContent = n > 1 ? `Parameters (object ${state.selected + 1} of ${n})` : 'Parameters';
+  };
+  on('selected', showTitle);
+  on('scene', showTitle);
   // Values the server answered (another control, a reload): update controls not being used.
   on('scene', ({ scene }) => {
-    const params = scene?.objects?.[OBJECT]?.params || {};
+    const params = scene?.objects?.[state.selected]?.params || {};
     for (const [name, c] of controls) if (document.activeElement !== c.input) showValue(c, params[name]);
   });
 
   el.querySelector('.params-reset').addEventListener('click', () => {
     const params = {};
     for (const [name, c] of controls) { params[name] = c.decl.default; showValue(c, c.decl.default); }
-    state.scene.objects[OBJECT].params = params;
-    send(params);
+    apply(params);
   });
 }

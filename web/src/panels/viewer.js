@@ -9,14 +9,33 @@ export function mountViewer(el) {
   const overlay = el.querySelector('.overlay');
   let nonce = 0;
   let retry = 0;
+  let live = false;
   const connect = () => {
     clearTimeout(retry);
-    if (state.session) img.src = api.streamUrl(state.session, nonce++);
+    live = !!state.session && state.visible;
+    if (live) img.src = api.streamUrl(state.session, nonce++);
   };
   // A dropped stream (server restart, network) reconnects after a pause.
-  img.addEventListener('error', () => { retry = setTimeout(connect, 1000); });
+  img.addEventListener('error', () => { if (live) retry = setTimeout(connect, 1000); });
   img.draggable = false;   // left-drag looks around (camera panel), never drags the image
   on('session', connect);
+  // A hidden tab closes its stream, so a background tab does not keep its session rendering
+  // (the last frame stays on screen); showing the tab again reconnects.
+  on('visible', ({ visible }) => {
+    if (visible) { connect(); return; }
+    live = false;
+    clearTimeout(retry);
+    if (img.naturalWidth) {   // keep the last frame: a still copy replaces the live stream
+      const c = document.createElement('canvas');
+      c.width = img.naturalWidth;
+      c.height = img.naturalHeight;
+      c.getContext('2d').drawImage(img, 0, 0);
+      img.src = c.toDataURL();
+    } else {
+      img.removeAttribute('src');
+    }
+    overlay.textContent = 'paused (tab hidden)';
+  });
 
   on('stats', ({ stats }) => {
     if (!stats) return;

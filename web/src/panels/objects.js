@@ -1,0 +1,167 @@
+// Objects (the object editor): add and remove objects (at least one stays), choose or upload a
+// mesh and up to four textures, choose the BRDF, translate/rotate/scale; and the scene-wide
+// samples per frame and maximum samples. Every change PATCHes the whole `objects` array (a
+// merge patch replaces arrays) or `render`; the server answers the full scene.
+// The object chosen here (state.selected) is the one the editor and the Parameters panel edit.
+import * as api from '../api.js';
+import { state, set, on } from '../state.js';
+import { coalesce } from '../coalesce.js';
+import { refreshAssets } from '../library.js';
+
+const MAX_TEXTURES = 4;
+const texName = (t) => (typeof t === 'string' ? t : t?.name);
+
+export function mountObjects(el) {
+  const $ = (c) => el.querySelector(c);
+  const $$ = (c) => [...el.querySelectorAll(c)];
+  const list = $('.obj-list');
+  const status = $('.obj-status');
+  let sel = state.selected;
+  /** Chooses object i: the Parameters panel and the editor follow its BRDF. */
+  async function select(i) {
+    sel = i;
+    if (state.selected !== i) set({ selected: i });
+    const name = state.scene.objects[i]?.brdf;
+    if (!name || name === state.brdf?.name) { set({ brdf: state.brdf }); return; }   // rebuild for the new object's values
+    const listed = state.library.find((b) => b.name === name);
+    try {
+      set({ brdf: { name, params: listed ? listed.params : (await api.getBrdf(name)).params } });
+    } catch (e) {
+      set({ status: `object ${i + 1}: ${e.message}` });
+    }
+  }
+
+  const send = coalesce(async (patch) => {
+    try {
+      set({ scene: await api.patchScene(state.session, patch) });
+      if (status.classList.contains('error')) { status.textContent = ''; status.classList.remove('error'); }
+    } catch (e) {
+      status.textContent = e.message;
+      status.classList.add('error');
+      set({ status: `objects: ${e.message}` });
+      try { set({ scene: await api.getScene(state.session) }); } catch { /* keep what we have */ }
+    }
+  });
+  const objects = () => state.scene.objects.map((o) => structuredClone(o));
+  const patchObject = (changes) => {
+    const all = objects();
+    Object.assign(all[sel], changes);
+    state.scene.objects = all;    // later edits build on this one before the answer comes
+    send({ objects: all });
+  };
+
+  const option = (value, text) => { const o = document.createElement('option'); o.value = value; o.textContent = text; return o; };
+  const fillSelect = (select, entries, value) => {
+    const have = entries.some(([v]) => v === value);
+    select.replaceChildren(...entries.map(([v, t]) => option(v, t)), ...(have || value == null ? [] : [option(value, value)]));
+    select.value = value ?? '';
+  };
+  const focused = (input) => document.activeElement === input;
+
+  function show() {
+    const scene = state.scene;
+    if (!scene) return;
+    const objs = scene.objects || [];
+    if (sel >= objs.length) select(Math.max(0, objs.length - 1));
+    list.replaceChildren(...objs.map((o, i) => option(String(i), `${i + 1}: ${o.mesh} · ${o.brdf.startsWith('scratch-') ? 'editor' : o.brdf}`)));
+    list.value = String(sel);
+    $('.obj-remove').disabled = objs.length <= 1;
+    const o = objs[sel];
+    const assets = state.assets || [];
+    const label = (a) => (a.builtin ? a.id : `${a.name} (${a.id})`);
+    if (o) {
+      if (!focused($('.obj-mesh'))) fillSelect($('.obj-mesh'), assets.filter((a) => a.kind === 'mesh').map((a) => [a.id, label(a)]), o.mesh);
+      const textures = assets.filter((a) => a.kind === 'texture').map((a) => [a.id, label(a)]);
+      for (const s of $$('.obj-tex')) if (!focused(s)) fillSelect(s, [['', '(none)'], ...textures], texName(o.textures?.[Number(s.dataset.i)]) ?? '');
+      const brdfs = (state.library || []).filter((b) => !b.broken).map((b) => [b.name, b.name]);
+      if (o.brdf.startsWith('scratch-')) brdfs.unshift([o.brdf, '(the editor\'s text)']);
+      if (!focused($('.obj-brdf'))) fillSelect($('.obj-brdf'), brdfs, o.brdf);
+      for (const input of $$('.xyz input')) if (!focused(input)) input.value = Number(o[input.dataset.k][Number(input.dataset.i)].toFixed(4));
+    }
+    if (!focused($('.r-spf'))) $('.r-spf').value = scene.render.samples_per_frame;
+    if (!focused($('.r-max'))) $('.r-max').value = scene.render.max_samples;
+  }
+  // Rebuilt only while its tab is shown: a camera drag answers a scene many times a second.
+  const shown = () => !el.closest('.tab-page')?.hidden;
+  on('scene', () => shown() && show());
+  on('assets', () => shown() && show());
+  on('tab', () => shown() && show());
+  on('library', () => shown() && show());
+
+  list.addEventListener('change', () => { select(Number(list.value)); show(); });
+  $('.obj-add').addEventListener('click', () => {
+    const all = objects();
+    const base = all[sel] || { translate: [0, 0, 0] };
+    all.push({ mesh: 'sphere', brdf: base.brdf || 'lambert', translate: [base.translate[0] + 2.2, base.translate[1], base.translate[2]] });
+    state.scene.objects = all;
+    send({ objects: all });
+    select(all.length - 1);
+  });
+  $('.obj-remove').addEventListener('click', () => {
+    const all = objects();
+    if (all.length <= 1) return;   // at least one object stays
+    all.splice(sel, 1);
+    state.scene.objects = all;
+    send({ objects: all });
+    select(Math.min(sel, all.length - 1));
+    show();
+  });
+  $('.obj-mesh').addEventListener('change', (ev) => patchObject({ mesh: ev.target.value }));
+  $('.obj-brdf').addEventListener('change', (ev) => {
+    const name = ev.target.value;
+    patchObject({ brdf: name, params: {} });   // the server fills in the new BRDF's defaults
+    const b = state.library.find((x) => x.name === name);
+    if (b) set({ brdf: { name, params: b.params } });   // the Parameters panel and the editor follow
+  });
+  for (const s of $$('.obj-tex')) {
+    s.addEventListener('change', () => {
+      const old = objects()[sel].textures || [];
+      const slots = $$('.obj-tex').map((x, i) => {
+        if (!x.value) return null;
+        return texName(old[i]) === x.value ? old[i] : x.value;   // keep an srgb flag set over the API
+      });
+      while (slots.length && slots.at(-1) === null) slots.pop();
+      // Textures bind to iTexture0..3 in order: an empty slot before a used one is `white`.
+      patchObject({ textures: slots.map((t) => t ?? 'white').slice(0, MAX_TEXTURES) });
+    });
+  }
+  for (const input of $$('.xyz input')) {
+    input.addEventListener('change', () => {
+      const v = Number(input.value);
+      if (input.value === '' || !Number.isFinite(v)) return;
+      const o = objects()[sel];
+      const vec = o[input.dataset.k].slice();
+      vec[Number(input.dataset.i)] = v;
+      patchObject({ [input.dataset.k]: vec });
+    });
+  }
+  const renderField = (cls, key) => $(cls).addEventListener('change', (ev) => {
+    const v = Number(ev.target.value);
+    if (Number.isInteger(v) && v > 0) send({ render: { [key]: v } });
+  });
+  renderField('.r-spf', 'samples_per_frame');
+  renderField('.r-max', 'max_samples');
+
+  async function upload(input, kind, apply) {
+    const file = input.files?.[0];
+    if (!file) return;
+    status.textContent = `uploading ${file.name}…`;
+    try {
+      const asset = await api.uploadAsset(file, kind);
+      await refreshAssets();
+      apply(asset.id);
+      status.textContent = `uploaded ${asset.name} as ${asset.id}`;
+    } catch (e) {
+      status.textContent = `upload: ${e.message}`;
+    } finally {
+      input.value = '';
+    }
+  }
+  $('.obj-mesh-upload').addEventListener('change', (ev) => upload(ev.target, 'mesh', (id) => patchObject({ mesh: id })));
+  $('.obj-tex-upload').addEventListener('change', (ev) => upload(ev.target, 'texture', (id) => {
+    const t = (objects()[sel].textures || []).slice();
+    if (t.length >= MAX_TEXTURES) { status.textContent = `uploaded ${id}; all four texture slots are in use: choose it in one`; return; }
+    t.push(id);
+    patchObject({ textures: t });
+  }));
+}
