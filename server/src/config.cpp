@@ -43,6 +43,8 @@ std::string usageText(const char* program) {
          "  --device NAME     pick the Vulkan device whose name contains NAME\n"
          "  --threads N       HTTP worker threads (default 64; each stream client holds one)\n"
          "  --idle-timeout S  seconds a session keeps rendering without a watcher (default 30)\n"
+         "  --session-reclaim S  at the session cap, a new session replaces the one unused for\n"
+         "                    longest if unused for S seconds (default 600; `default` is kept)\n"
          "  --no-cache-load   ignore cached SPIR-V (<data-dir>/cache/spirv), compile afresh and\n"
          "                    refresh the cache\n"
          "  --max-upload-bytes N      largest uploaded asset file in bytes (default 67108864 = 64 MiB)\n"
@@ -132,6 +134,8 @@ ParseOutcome parse_command_line(int argc, const char* const* argv) {
       err = takeInt(2, 1024, config.threads);
     else if (name == "--idle-timeout")
       err = takeInt(1, 24 * 3600, config.idleTimeoutSec);
+    else if (name == "--session-reclaim")
+      err = takeInt(1, 7 * 24 * 3600, config.sessionReclaimSec);
     else if (name == "--max-upload-bytes")
       err = takeInt(1, 1ll << 30, config.maxUploadBytes);
     else if (name == "--max-upload-triangles")

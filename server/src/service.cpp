@@ -94,7 +94,8 @@ Result<std::unique_ptr<Service>> Service::create(const ServerConfig& config, std
   if (config.hotLoad) service->hotLoader.start(service->renderer, service->library.list());
 
   service->sessions = std::make_unique<SessionManager>(
-      service->renderer, std::chrono::milliseconds(std::chrono::seconds(config.idleTimeoutSec)), kMaxSessions);
+      service->renderer, std::chrono::milliseconds(std::chrono::seconds(config.idleTimeoutSec)), kMaxSessions,
+      std::chrono::milliseconds(std::chrono::seconds(config.sessionReclaimSec)));
   SessionManager::Created created = service->sessions->create(kDefaultSessionId);
   if (!created.session) {
     return makeError(created.error ? created.error->code : ErrorCode::Internal,

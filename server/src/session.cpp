@@ -99,6 +99,7 @@ Result<void> Session::applyScene(std::unique_lock<std::mutex>& updateLock, const
   {
     std::lock_guard lock(mutex_);
     hasScene_ = true;
+    lastActive_ = Clock::now();
     sceneJson_ = std::move(sceneJson);
     maxSamples_ = scene.render.maxSamples;
     stats_ = fresh;
@@ -128,8 +129,15 @@ void Session::touch() {
   {
     std::lock_guard lock(mutex_);
     watchedUntil_ = std::max(watchedUntil_, Clock::now() + idleTimeout_);
+    lastActive_ = Clock::now();
   }
   wake_.notify_all();
+}
+
+std::chrono::milliseconds Session::inactiveFor(Clock::time_point now) const {
+  std::lock_guard lock(mutex_);
+  if (streamClients_ > 0 || waiters_ > 0 || now <= lastActive_) return std::chrono::milliseconds(0);
+  return std::chrono::duration_cast<std::chrono::milliseconds>(now - lastActive_);
 }
 
 FrameStats Session::stats() const {

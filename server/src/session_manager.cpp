@@ -5,8 +5,26 @@
 namespace brdfa::server {
 
 SessionManager::SessionManager(std::shared_ptr<Renderer> renderer, std::chrono::milliseconds idleTimeout,
-                               size_t maxSessions)
-    : renderer_(std::move(renderer)), idleTimeout_(idleTimeout), maxSessions_(maxSessions) {}
+                               size_t maxSessions, std::chrono::milliseconds reclaimAfter)
+    : renderer_(std::move(renderer)), idleTimeout_(idleTimeout), maxSessions_(maxSessions), reclaimAfter_(reclaimAfter) {}
+
+std::shared_ptr<Session> SessionManager::takeAbandonedLocked() {
+  const auto now = Session::Clock::now();
+  auto oldest = sessions_.end();
+  std::chrono::milliseconds longest{-1};
+  for (auto it = sessions_.begin(); it != sessions_.end(); ++it) {
+    if (it->first == kDefaultSessionId) continue;
+    const auto idle = it->second->inactiveFor(now);
+    if (idle >= reclaimAfter_ && idle > longest) {
+      longest = idle;
+      oldest = it;
+    }
+  }
+  if (oldest == sessions_.end()) return nullptr;
+  std::shared_ptr<Session> taken = std::move(oldest->second);
+  sessions_.erase(oldest);
+  return taken;
+}
 
 SessionManager::~SessionManager() { stopAll(); }
 
@@ -22,30 +40,46 @@ std::string SessionManager::randomId() {
 
 SessionManager::Created SessionManager::create(const std::string& requestedId) {
   Created out;
+  std::vector<std::shared_ptr<Session>> reclaimed;  // stopped outside the lock (joins threads)
   // Whether a session may be added now; checked before and after the unlocked createView,
-  // since another create may fill the last slot (or the server stop) meanwhile. Holds mutex_.
+  // since another create may fill the last slot (or the server stop) meanwhile. A full server
+  // first reclaims an abandoned session. Holds mutex_.
   auto refused = [&] {
+    if (!stopped_ && sessions_.size() >= maxSessions_)
+      if (auto abandoned = takeAbandonedLocked()) reclaimed.push_back(std::move(abandoned));
     if (stopped_) out.error = makeError(ErrorCode::DeviceError, "server is shutting down");
     else if (sessions_.size() >= maxSessions_) out.full = true;
     return stopped_ || out.full;
   };
+  auto stopReclaimed = [&] {
+    for (auto& s : reclaimed) s->stop();
+    reclaimed.clear();
+  };
+  bool refusedNow;
   {
     std::lock_guard lock(mutex_);
-    if (refused()) return out;
+    refusedNow = refused();
   }
+  stopReclaimed();
+  if (refusedNow) return out;
   // createView may allocate device memory; not under the lock.
   Result<std::unique_ptr<RenderView>> view = renderer_->createView();
   if (!view) {
     out.error = view.takeError();
     return out;
   }
-  std::lock_guard lock(mutex_);
-  if (refused()) return out;
-  std::string id = requestedId;
-  while (id.empty() || sessions_.count(id)) id = randomId();
-  auto session = std::make_shared<Session>(id, std::move(view.value()), idleTimeout_);
-  sessions_[id] = session;
-  out.session = std::move(session);
+  {
+    std::lock_guard lock(mutex_);
+    refusedNow = refused();
+    if (!refusedNow) {
+      std::string id = requestedId;
+      while (id.empty() || sessions_.count(id)) id = randomId();
+      auto session = std::make_shared<Session>(id, std::move(view.value()), idleTimeout_);
+      sessions_[id] = session;
+      out.session = std::move(session);
+    }
+  }
+  stopReclaimed();
   return out;
 }
 

@@ -315,6 +315,41 @@ TEST_F(Sessions, SessionCountIsCapped) {
   EXPECT_EQ(del("/api/sessions/" + bodyJson(r)["id"].get<std::string>())->status, 204);
 }
 
+// Browser tabs create sessions and cannot reliably delete them. At the cap, a new session
+// reclaims the one unused for longest, once it has been unused for --session-reclaim seconds;
+// a session whose stats are polled (an open tab) is never taken, nor is `default`.
+TEST(SessionReclaim, AtTheCapTheLongestUnusedSessionMakesRoom) {
+  ServerProcess server;
+  ASSERT_EQ(server.start({"--session-reclaim", "2"}), "");
+  auto client = server.client();
+  const std::string scene = furnaceScene("lambert", json::object(), 16, 1).dump();
+  std::vector<std::string> ids;
+  for (int i = 0; i < 40; ++i) {
+    auto r = client->Post("/api/sessions", scene, "application/json");
+    ASSERT_TRUE(r);
+    if (r->status != 201) {
+      EXPECT_EQ(r->status, 429) << "nothing is old enough to reclaim yet";
+      break;
+    }
+    ids.push_back(bodyJson(r)["id"]);
+  }
+  ASSERT_GE(ids.size(), 2u);
+  // ids[0] stays in use (an open tab polls its stats); the others are abandoned.
+  for (int i = 0; i < 6; ++i) {
+    EXPECT_EQ(client->Get("/api/sessions/" + ids[0] + "/stats")->status, 200);
+    std::this_thread::sleep_for(std::chrono::milliseconds(500));
+  }
+  auto r = client->Post("/api/sessions", scene, "application/json");
+  ASSERT_TRUE(r);
+  ASSERT_EQ(r->status, 201) << r->body;
+  EXPECT_EQ(client->Get("/api/sessions/" + ids[0])->status, 200) << "a session in use is never reclaimed";
+  EXPECT_EQ(client->Get("/api/sessions/default")->status, 200);
+  int gone = 0;
+  for (size_t i = 1; i < ids.size(); ++i) gone += client->Get("/api/sessions/" + ids[i])->status == 404 ? 1 : 0;
+  EXPECT_EQ(gone, 1) << "exactly one abandoned session made room";
+  EXPECT_EQ(server.terminate(), 0);
+}
+
 TEST_F(Sessions, NanProducingBrdfIsCountedAndNeverReachesPixels) {
   auto r = put("/api/brdfs/itest_nan", kNanOnHalfHemisphere, "text/plain");
   ASSERT_TRUE(r);

@@ -19,6 +19,7 @@ struct ServerConfig {
   bool loadCache = true;           // --no-cache-load: compile afresh, then refresh the cache
   bool hotLoad = false;            // --hot-load: build cached BRDFs' pipelines after start-up
   int idleTimeoutSec = 30;         // a session with no watcher for this long stops rendering
+  int sessionReclaimSec = 600;     // at the session cap, one unused this long makes room
   // Uploads (POST /api/assets), stored in <dataDir>/assets. Each limit has a flag of its name.
   uint64_t maxUploadBytes = 64ull << 20;      // --max-upload-bytes: one file's size
   uint64_t maxUploadTriangles = 2'000'000;    // --max-upload-triangles: of one mesh

@@ -66,6 +66,9 @@ class Session {
 
   // Marks the session watched for the idle timeout (frame and stats requests).
   void touch();
+  // How long nobody has used the session: 0 while a stream or a frame wait is open, else the
+  // time since its creation, its last scene change or its last touch(), whichever is latest.
+  std::chrono::milliseconds inactiveFor(Clock::time_point now) const;
   FrameStats stats() const;  // as of the latest pass; never blocks on the device
   std::optional<Error> renderError() const;
 
@@ -132,6 +135,7 @@ class Session {
   FrameStats stats_;
   std::optional<Error> renderError_;
   Clock::time_point watchedUntil_{};
+  Clock::time_point lastActive_ = Clock::now();  // creation, scene change or touch()
   int waiters_ = 0;
   std::multiset<uint64_t> waitTargets_;  // spp each waitAndEncodeFrame caller waits for
   int pendingViewCalls_ = 0;

@@ -17,7 +17,12 @@ inline constexpr const char* kDefaultSessionId = "default";
 
 class SessionManager {
  public:
-  SessionManager(std::shared_ptr<Renderer> renderer, std::chrono::milliseconds idleTimeout, size_t maxSessions);
+  // When the cap is reached, create() reclaims the session unused for longest if it has been
+  // unused for at least `reclaimAfter` (browser tabs make sessions and cannot reliably delete
+  // them: a class would otherwise fill the server with abandoned ones). `default` is never
+  // reclaimed.
+  SessionManager(std::shared_ptr<Renderer> renderer, std::chrono::milliseconds idleTimeout, size_t maxSessions,
+                 std::chrono::milliseconds reclaimAfter = std::chrono::minutes(10));
   ~SessionManager();  // stopAll()
 
   struct Created {
@@ -46,6 +51,10 @@ class SessionManager {
   const std::shared_ptr<Renderer> renderer_;
   const std::chrono::milliseconds idleTimeout_;
   const size_t maxSessions_;
+  const std::chrono::milliseconds reclaimAfter_;
+  // The non-default session unused for longest, if unused for at least reclaimAfter_; removed
+  // from the map (the caller stops it outside the lock). Holds mutex_.
+  std::shared_ptr<Session> takeAbandonedLocked();
   mutable std::mutex mutex_;
   std::map<std::string, std::shared_ptr<Session>> sessions_;
   bool stopped_ = false;
