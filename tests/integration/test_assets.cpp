@@ -12,11 +12,8 @@
 #include <sstream>
 
 #include "brdfa/image_codec.h"
+#include "image_test_encoders.h"
 #include "server_fixture.h"
-
-#define STB_IMAGE_WRITE_IMPLEMENTATION
-#define STB_IMAGE_WRITE_STATIC
-#include <stb/stb_image_write.h>  // a system header: its unused static functions raise no warnings
 
 namespace brdfa::itest {
 namespace {
@@ -30,10 +27,6 @@ using nlohmann::json;
 const char* const kOctahedron =
     "# octahedron\nv 1 0 0\nv -1 0 0\nv 0 1 0\nv 0 -1 0\nv 0 0 1\nv 0 0 -1\n"
     "f 1 3 5\nf 3 2 5\nf 2 4 5\nf 4 1 5\nf 3 1 6\nf 2 3 6\nf 4 2 6\nf 1 4 6\n";
-
-void appendBytes(void* context, void* data, int size) {
-  static_cast<std::string*>(context)->append(static_cast<const char*>(data), size_t(size));
-}
 
 // w x h RGBA8 of one colour, or noise when `noise` (incompressible: a large file).
 std::vector<uint8_t> rgba8(int w, int h, std::array<uint8_t, 3> rgb, bool noise = false) {
@@ -55,17 +48,13 @@ std::string png(int w, int h, std::array<uint8_t, 3> rgb, bool noise = false) {
 }
 
 std::string jpeg(int w, int h, std::array<uint8_t, 3> rgb, bool noise = false) {
-  std::string out;
-  stbi_write_jpg_to_func(appendBytes, &out, w, h, 4, rgba8(w, h, rgb, noise).data(), 95);
-  return out;
+  return testing::encodeJpeg(w, h, 4, rgba8(w, h, rgb, noise));
 }
 
 std::string hdr(int w, int h, std::array<float, 3> rgb) {
   std::vector<float> px;
   for (int i = 0; i < w * h; ++i) px.insert(px.end(), rgb.begin(), rgb.end());
-  std::string out;
-  stbi_write_hdr_to_func(appendBytes, &out, w, h, 3, px.data());
-  return out;
+  return testing::encodeHdr(w, h, px);
 }
 
 std::string exr(int w, int h, std::array<float, 3> rgb) {

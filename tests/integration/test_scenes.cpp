@@ -4,28 +4,13 @@
 #include <cmath>
 #include <string>
 
+#include "image_test_encoders.h"
 #include "server_fixture.h"
-
-#define STB_IMAGE_WRITE_IMPLEMENTATION
-#define STB_IMAGE_WRITE_STATIC
-#if defined(__GNUC__)
-#pragma GCC diagnostic push
-#pragma GCC diagnostic ignored "-Wunused-function"
-#pragma GCC diagnostic ignored "-Wmissing-field-initializers"
-#endif
-#include <stb/stb_image_write.h>
-#if defined(__GNUC__)
-#pragma GCC diagnostic pop
-#endif
 
 namespace brdfa::itest {
 namespace {
 
 using nlohmann::json;
-
-void appendTo(void* context, void* data, int size) {
-  static_cast<std::string*>(context)->append(static_cast<const char*>(data), size_t(size));
-}
 
 // Radiance 1 above the horizon (world +y: the upper half of the image rows), 0 below.
 std::string upperHemisphereHdr(int width, int height) {
@@ -33,9 +18,7 @@ std::string upperHemisphereHdr(int width, int height) {
   for (int y = 0; y < height; ++y)
     for (int x = 0; x < width; ++x)
       for (int c = 0; c < 3; ++c) rgb[(size_t(y) * width + x) * 3 + c] = y < height / 2 ? 1.0f : 0.0f;
-  std::string out;
-  stbi_write_hdr_to_func(appendTo, &out, width, height, 3, rgb.data());
-  return out;
+  return testing::encodeHdr(width, height, rgb);
 }
 
 // Unit sphere at the origin, camera at (0, 0, 3) looking down -z with a 45 degree field of

@@ -1,4 +1,4 @@
-// Encoders for the image-decoding tests: every test input is made in memory with stb_image_write,
+// Encoders for the image-decoding and upload tests: every test input is made in memory with stb_image_write,
 // tinyexr and OpenEXR, the libraries' own writers, so the decoders are checked against
 // independent code (tinyexr's EXR writer in particular shares no code with the OpenEXR reader).
 #pragma once
