@@ -495,6 +495,10 @@ Error assetError(Error e, AssetKind kind, const std::string& name) {
   return e;
 }
 
+// Stored assets passed inspectAsset, with the configured limits, when they were stored: read
+// back, they are decoded without limits.
+constexpr AssetLimits kUnlimited{~0ull, ~0ull, ~0ull};
+
 // Looks `name` up in a cache of weak references, dropping the entry when it has expired.
 template <class T>
 std::shared_ptr<const T> lockCached(std::map<std::string, std::weak_ptr<const T>>& cache, const std::string& name) {
@@ -533,6 +537,32 @@ Result<std::string> RendererImpl::registeredPath(AssetKind kind, const std::stri
   return it->second;
 }
 
+template <class Gpu, class MakeBuiltin, class Decode, class Upload>
+Result<std::shared_ptr<const Gpu>> RendererImpl::findOrLoad(AssetKind kind, const std::string& name,
+                                                            const std::string& key,
+                                                            std::map<std::string, std::shared_ptr<const Gpu>>& builtins,
+                                                            std::map<std::string, std::weak_ptr<const Gpu>>& uploads,
+                                                            MakeBuiltin makeBuiltin, Decode decode, Upload upload) {
+  if (auto it = builtins.find(key); it != builtins.end()) return it->second;
+  if (auto cached = lockCached(uploads, key)) return cached;
+  if (auto builtin = makeBuiltin()) {
+    auto gpu = upload(*builtin);
+    if (!gpu) return gpu.takeError();
+    builtins[key] = gpu.value();
+    return std::shared_ptr<const Gpu>(gpu.value());
+  }
+  auto path = registeredPath(kind, name);
+  if (!path) return path.takeError();
+  auto bytes = readWholeFile(*path);
+  if (!bytes) return assetError(bytes.takeError(), kind, name);
+  auto data = decode(std::string_view(*bytes));
+  if (!data) return assetError(data.takeError(), kind, name);
+  auto gpu = upload(*data);
+  if (!gpu) return gpu.takeError();
+  uploads[key] = gpu.value();
+  return std::shared_ptr<const Gpu>(gpu.value());
+}
+
 Result<std::shared_ptr<GpuEnvironment>> RendererImpl::uploadEnvironment(const std::string& name,
                                                                        const EnvironmentData& data) {
   ImageSpec spec;
@@ -553,25 +583,11 @@ Result<std::shared_ptr<GpuEnvironment>> RendererImpl::uploadEnvironment(const st
 
 Result<std::shared_ptr<const GpuEnvironment>> RendererImpl::environment(const std::string& name) {
   std::lock_guard<std::mutex> lock(assetMutex_);
-  if (auto it = environments_.find(name); it != environments_.end()) return it->second;
-  if (auto cached = lockCached(uploadedEnvironments_, name)) return cached;
-  auto builtin = makeBuiltinEnvironment(name);
-  if (builtin) {
-    auto env = uploadEnvironment(name, *builtin);
-    if (!env) return env.takeError();
-    environments_[name] = env.value();
-    return std::shared_ptr<const GpuEnvironment>(env.value());
-  }
-  auto path = registeredPath(AssetKind::Environment, name);
-  if (!path) return path.takeError();
-  auto bytes = readWholeFile(*path);
-  if (!bytes) return assetError(bytes.takeError(), AssetKind::Environment, name);
-  auto data = decodeEnvironment(*bytes, AssetLimits{~0ull, ~0ull, ~0ull}, name, nullptr);
-  if (!data) return assetError(data.takeError(), AssetKind::Environment, name);
-  auto env = uploadEnvironment(name, *data);
-  if (!env) return env.takeError();
-  uploadedEnvironments_[name] = env.value();
-  return std::shared_ptr<const GpuEnvironment>(env.value());
+  return findOrLoad(
+      AssetKind::Environment, name, name, environments_, uploadedEnvironments_,
+      [&] { return makeBuiltinEnvironment(name); },
+      [&](std::string_view bytes) { return decodeEnvironment(bytes, kUnlimited, name, nullptr); },
+      [&](const EnvironmentData& data) { return uploadEnvironment(name, data); });
 }
 
 Result<std::shared_ptr<GpuMesh>> RendererImpl::uploadMesh(const std::string& name, const MeshData& data) {
@@ -603,25 +619,10 @@ Result<std::shared_ptr<GpuMesh>> RendererImpl::uploadMesh(const std::string& nam
 
 Result<std::shared_ptr<const GpuMesh>> RendererImpl::mesh(const std::string& name) {
   std::lock_guard<std::mutex> lock(assetMutex_);
-  if (auto it = meshes_.find(name); it != meshes_.end()) return it->second;
-  if (auto cached = lockCached(uploadedMeshes_, name)) return cached;
-  auto builtin = makeBuiltinMesh(name);
-  if (builtin) {
-    auto gpu = uploadMesh(name, *builtin);
-    if (!gpu) return gpu.takeError();
-    meshes_[name] = gpu.value();
-    return std::shared_ptr<const GpuMesh>(gpu.value());
-  }
-  auto path = registeredPath(AssetKind::Mesh, name);
-  if (!path) return path.takeError();
-  auto bytes = readWholeFile(*path);
-  if (!bytes) return assetError(bytes.takeError(), AssetKind::Mesh, name);
-  auto data = loadObjMesh(*bytes, AssetLimits{~0ull, ~0ull, ~0ull}, nullptr);
-  if (!data) return assetError(data.takeError(), AssetKind::Mesh, name);
-  auto gpu = uploadMesh(name, *data);
-  if (!gpu) return gpu.takeError();
-  uploadedMeshes_[name] = gpu.value();
-  return std::shared_ptr<const GpuMesh>(gpu.value());
+  return findOrLoad(
+      AssetKind::Mesh, name, name, meshes_, uploadedMeshes_, [&] { return makeBuiltinMesh(name); },
+      [&](std::string_view bytes) { return loadObjMesh(bytes, kUnlimited, nullptr); },
+      [&](const MeshData& data) { return uploadMesh(name, data); });
 }
 
 Result<std::shared_ptr<GpuTexture>> RendererImpl::uploadTexture(const std::string& name, bool srgb,
@@ -645,27 +646,12 @@ Result<std::shared_ptr<GpuTexture>> RendererImpl::uploadTexture(const std::strin
 }
 
 Result<std::shared_ptr<const GpuTexture>> RendererImpl::texture(const std::string& name, bool srgb) {
-  const std::string key = name + (srgb ? "|srgb" : "|linear");
   std::lock_guard<std::mutex> lock(assetMutex_);
-  if (auto it = textures_.find(key); it != textures_.end()) return it->second;
-  if (auto cached = lockCached(uploadedTextures_, key)) return cached;
-  auto builtin = makeBuiltinTexture(name);
-  if (builtin) {
-    auto gpu = uploadTexture(name, srgb, *builtin);
-    if (!gpu) return gpu.takeError();
-    textures_[key] = gpu.value();
-    return std::shared_ptr<const GpuTexture>(gpu.value());
-  }
-  auto path = registeredPath(AssetKind::Texture, name);
-  if (!path) return path.takeError();
-  auto bytes = readWholeFile(*path);
-  if (!bytes) return assetError(bytes.takeError(), AssetKind::Texture, name);
-  auto data = decodeTexture(*bytes, AssetLimits{~0ull, ~0ull, ~0ull});
-  if (!data) return assetError(data.takeError(), AssetKind::Texture, name);
-  auto gpu = uploadTexture(name, srgb, *data);
-  if (!gpu) return gpu.takeError();
-  uploadedTextures_[key] = gpu.value();
-  return std::shared_ptr<const GpuTexture>(gpu.value());
+  return findOrLoad(
+      AssetKind::Texture, name, name + (srgb ? "|srgb" : "|linear"), textures_, uploadedTextures_,
+      [&] { return makeBuiltinTexture(name); },
+      [&](std::string_view bytes) { return decodeTexture(bytes, kUnlimited); },
+      [&](const TextureData& data) { return uploadTexture(name, srgb, data); });
 }
 
 RendererCounters RendererImpl::counters() const {

@@ -120,6 +120,14 @@ class RendererImpl final : public Renderer, public std::enable_shared_from_this<
   // Asset caches. Built-ins are kept for the renderer's life; registered (uploaded) assets
   // only while a view holds them, so large uploads do not pile up in memory.
   Result<std::string> registeredPath(AssetKind kind, const std::string& name) const;  // assetMutex_ held
+  // The lookup every asset kind shares (assetMutex_ held): `key` in the built-ins' cache, then in
+  // the uploads' cache; else a built-in made now by `makeBuiltin()`, else the file registered as
+  // (kind, name), read and `decode`d. `upload(data)` puts what was made on the device.
+  template <class Gpu, class MakeBuiltin, class Decode, class Upload>
+  Result<std::shared_ptr<const Gpu>> findOrLoad(AssetKind kind, const std::string& name, const std::string& key,
+                                                std::map<std::string, std::shared_ptr<const Gpu>>& builtins,
+                                                std::map<std::string, std::weak_ptr<const Gpu>>& uploads,
+                                                MakeBuiltin makeBuiltin, Decode decode, Upload upload);
   Result<std::shared_ptr<GpuMesh>> uploadMesh(const std::string& name, const MeshData& data);
   Result<std::shared_ptr<GpuEnvironment>> uploadEnvironment(const std::string& name, const EnvironmentData& data);
   Result<std::shared_ptr<GpuTexture>> uploadTexture(const std::string& name, bool srgb, const TextureData& data);
