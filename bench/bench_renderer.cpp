@@ -17,17 +17,6 @@ namespace brdfa::bench {
 
 namespace {
 
-std::string readText(const std::string& path) {
-  std::ifstream in(path);
-  std::stringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
-
-double msSince(std::chrono::steady_clock::time_point t0) {
-  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
-}
-
 Scene ggxScene(const std::string& sourceDir, bool visibleBackground, int samplesPerPass) {
   auto def = parseBrdf(readText(sourceDir + "/shaders/brdfs/ggx.brdf"));
   Scene s;

@@ -15,13 +15,6 @@ namespace brdfa::bench {
 
 namespace {
 
-std::string readFile(const std::string& path) {
-  std::ifstream in(path);
-  std::stringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
-
 std::shared_ptr<const BrdfDefinition> brdfFrom(const std::string& text) {
   auto def = parseBrdf(text);
   if (!def) return nullptr;
@@ -74,7 +67,7 @@ FirstFrame firstFrame(Renderer& renderer, const Scene& scene) {
   if (!view) return r;
   auto t0 = std::chrono::steady_clock::now();
   if (!(*view)->setScene(scene)) return r;
-  r.setSceneMs = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+  r.setSceneMs = msSince(t0);
   auto pass = (*view)->renderPass();
   r.firstPassMs = pass ? pass->lastPassMs : -1;
   r.programBytes = (*view)->stats().programBytes;
@@ -88,7 +81,7 @@ int runSceneBench(const std::string& sourceDir, int rounds) {
   options.shaderDir = sourceDir + "/shaders";
   auto renderer = Renderer::create(options);
   if (!renderer) return 1;
-  auto ggx = brdfFrom(readFile(sourceDir + "/shaders/brdfs/ggx.brdf"));
+  auto ggx = brdfFrom(readText(sourceDir + "/shaders/brdfs/ggx.brdf"));
   if (!ggx) return 1;
 
   // Same sphere, same pixels: 32k triangles against 511k. Interleaved, after the warm-up passes
@@ -121,7 +114,7 @@ int runSceneBench(const std::string& sourceDir, int rounds) {
   row("dense_sphere: passes that rasterize a slice", median(firstMs[1]), "ms");
 
   // Specialization: the same sphere, lambert only against textures + anisotropy.
-  const std::string lambert = readFile(sourceDir + "/shaders/brdfs/lambert.brdf");
+  const std::string lambert = readText(sourceDir + "/shaders/brdfs/lambert.brdf");
   std::vector<double> plainFirst, richFirst;
   uint64_t plainBytes = 0, richBytes = 0;
   for (int i = 0; i < 5; ++i) {
