@@ -1,7 +1,9 @@
 // Sends the latest value only: while a request is in flight, newer values replace each other
 // and the last one goes out when it returns. A slider drag or a held W key produces far more
 // changes than the server can apply; this keeps one PATCH in flight and never queues stale ones.
-export function coalesce(send) {
+// With `merge`, a value waiting to be sent is combined with the newer one (merge(older, newer))
+// instead of replaced: for partial patches, where each holds different fields.
+export function coalesce(send, merge = (older, newer) => newer) {
   let pending;        // latest value not sent yet
   let has = false;
   let busy = false;
@@ -15,7 +17,7 @@ export function coalesce(send) {
     }
   };
   const push = (value) => {
-    pending = value;
+    pending = has ? merge(pending, value) : value;
     has = true;
     if (!busy) pump();
   };

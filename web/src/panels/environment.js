@@ -8,6 +8,8 @@ import { refreshAssets } from '../library.js';
 export function mountEnvironment(el) {
   const $ = (c) => el.querySelector(c);
   const status = $('.env-status');
+  // Each control sends only its own field: while one PATCH is in flight, the others' changes
+  // merge (a newer value of the same field wins), so none is lost on a slow server.
   const send = coalesce(async (environment) => {
     try {
       set({ scene: await api.patchScene(state.session, { environment }) });
@@ -15,7 +17,7 @@ export function mountEnvironment(el) {
     } catch (e) {
       status.textContent = e.message;
     }
-  });
+  }, (older, newer) => ({ ...older, ...newer }));
   const focused = (x) => document.activeElement === x;
 
   function show() {

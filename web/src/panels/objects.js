@@ -41,7 +41,9 @@ export function mountObjects(el) {
       set({ status: `objects: ${e.message}` });
       try { set({ scene: await api.getScene(state.session) }); } catch { /* keep what we have */ }
     }
-  });
+  }, // Waiting merge patches combine: a newer `objects` array wins, `render` fields add up.
+  (older, newer) => ({ ...older, ...newer,
+    ...(older.render && newer.render ? { render: { ...older.render, ...newer.render } } : {}) }));
   const objects = () => state.scene.objects.map((o) => structuredClone(o));
   const patchObject = (changes) => {
     const all = objects();
