@@ -1,5 +1,7 @@
 #include "brdfa_server/http_errors.h"
 
+#include "brdfa_server/http_body.h"
+
 namespace brdfa::server {
 
 int httpStatusFor(ErrorCode code) {
@@ -80,7 +82,7 @@ nlohmann::json diagnosticsToJson(const std::vector<Diagnostic>& ds) {
 void sendJson(httplib::Response& res, const nlohmann::json& body, int status) {
   res.status = status;
   // `replace` keeps invalid UTF-8 from user text (a .brdf file, a name) from throwing here.
-  res.set_content(body.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace), "application/json");
+  sendBody(res, body.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace), "application/json");
 }
 
 void sendError(httplib::Response& res, int status, const std::string& code, const std::string& message,

@@ -1,30 +1,15 @@
 // The static UI from <root>/web/. Registered last: it answers every GET no API route took.
 #include <filesystem>
-#include <fstream>
 #include <sstream>
 
+#include "brdfa_server/http_body.h"
 #include "brdfa_server/http_errors.h"
+#include "brdfa_server/static_files.h"
 #include "routes.h"
 
 namespace brdfa::server {
 
 namespace {
-
-const char* contentTypeFor(const std::filesystem::path& path) {
-  std::string ext = path.extension().string();
-  if (ext == ".html") return "text/html; charset=utf-8";
-  // ES modules are only executed when served with a JavaScript MIME type.
-  if (ext == ".js" || ext == ".mjs") return "text/javascript; charset=utf-8";
-  if (ext == ".css") return "text/css; charset=utf-8";
-  if (ext == ".json" || ext == ".map") return "application/json";
-  if (ext == ".svg") return "image/svg+xml";
-  if (ext == ".png") return "image/png";
-  if (ext == ".jpg" || ext == ".jpeg") return "image/jpeg";
-  if (ext == ".ico") return "image/x-icon";
-  if (ext == ".wasm") return "application/wasm";
-  if (ext == ".txt" || ext == ".brdf") return "text/plain; charset=utf-8";
-  return "application/octet-stream";
-}
 
 // Relative URL path -> file under `webRoot`, or nullopt when it is not allowed. Rejected:
 // any `..` segment, backslashes, NUL, absolute paths, and (after resolving symlinks) anything
@@ -59,12 +44,22 @@ void registerStaticRoutes(httplib::Server& server, Service& service) {
     std::error_code ec;
     if (!std::filesystem::is_regular_file(*path, ec))
       return sendError(res, 404, "not_found", "no such file: " + req.path);
-    std::ifstream in(*path, std::ios::binary);
-    std::ostringstream data;
-    data << in.rdbuf();
-    if (!in) return sendError(res, 500, "internal", "cannot read " + req.path);
+    std::optional<StaticFile> file = service.staticFiles.get(*path);
+    if (!file) return sendError(res, 500, "internal", "cannot read " + req.path);
+    // no-cache: the browser revalidates each time (the UI changes with every build), and the
+    // ETag turns an unchanged file into a bodiless 304.
     res.set_header("Cache-Control", "no-cache");
-    res.set_content(data.str(), contentTypeFor(*path));
+    res.set_header("ETag", file->etag);
+    res.set_header("Vary", "Accept-Encoding");
+    if (etagMatches(req.get_header_value("If-None-Match"), file->etag)) {
+      res.status = 304;
+      return;
+    }
+    if (file->gzip && acceptsGzip(req.get_header_value("Accept-Encoding"))) {
+      res.set_header("Content-Encoding", "gzip");
+      return sendBody(res, file->gzip, file->contentType);
+    }
+    sendBody(res, file->bytes, file->contentType);
   });
 }
 

@@ -5,6 +5,8 @@
 #include <unistd.h>
 
 #include <atomic>
+#include <fstream>
+#include <iterator>
 #include <thread>
 
 #include "server_fixture.h"
@@ -103,6 +105,51 @@ TEST_F(Service, ServesTheWebUi) {
   ASSERT_EQ(r->status, 200);
   EXPECT_NE(r->get_header_value("Content-Type").find("javascript"), std::string::npos);
   EXPECT_EQ(get("/no-such-file.js")->status, 404);
+}
+
+TEST_F(Service, StaticFilesComeGzippedWithAnEtagAndApiAnswersAreNeverCompressed) {
+  std::ifstream in(std::string(BRDFA_SOURCE_DIR) + "/web/index.html", std::ios::binary);
+  const std::string onDisk((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  ASSERT_FALSE(onDisk.empty());
+  auto cli = server_->client(20);
+  cli->set_decompress(true);  // the client inflates gzip itself; the header says what was sent
+
+  auto r = cli->Get("/index.html", {{"Accept-Encoding", "gzip, deflate, br"}});
+  ASSERT_TRUE(r);
+  ASSERT_EQ(r->status, 200);
+  EXPECT_EQ(r->get_header_value("Content-Encoding"), "gzip");
+  EXPECT_EQ(r->body, onDisk);
+  const std::string etag = r->get_header_value("ETag");
+  ASSERT_FALSE(etag.empty());
+  EXPECT_EQ(etag.front(), '"');
+
+  // Unchanged since: 304 without a body, for the strong and the weak form.
+  for (const std::string& tag : {etag, "W/" + etag, "\"other\", " + etag}) {
+    r = cli->Get("/index.html", {{"If-None-Match", tag}});
+    ASSERT_TRUE(r);
+    EXPECT_EQ(r->status, 304) << tag;
+    EXPECT_TRUE(r->body.empty());
+  }
+  r = cli->Get("/index.html", {{"If-None-Match", "\"other\""}});
+  ASSERT_TRUE(r);
+  EXPECT_EQ(r->status, 200);
+
+  // gzip refused (q=0) or not offered: the file as it is.
+  for (const char* accept : {"gzip;q=0", "br", "identity"}) {
+    r = cli->Get("/index.html", {{"Accept-Encoding", accept}});
+    ASSERT_TRUE(r);
+    EXPECT_EQ(r->get_header_value("Content-Encoding"), "") << accept;
+    EXPECT_EQ(r->body, onDisk) << accept;
+  }
+
+  // API answers go out as they are, even to a client offering br: Debian's httplib would
+  // otherwise brotli them at quality 11 on every request.
+  for (const char* path : {"/api/brdfs", "/api/health", "/no-such-file.js"}) {
+    r = cli->Get(path, {{"Accept-Encoding", "gzip, deflate, br"}});
+    ASSERT_TRUE(r);
+    EXPECT_EQ(r->get_header_value("Content-Encoding"), "") << path;
+    EXPECT_FALSE(nlohmann::json::parse(r->body, nullptr, false).is_discarded()) << path;
+  }
 }
 
 // ------------------------------------------------------------------------------------------

@@ -18,6 +18,7 @@
 #include "brdfa_server/jobs.h"
 #include "brdfa_server/scene_json.h"
 #include "brdfa_server/session_manager.h"
+#include "brdfa_server/static_files.h"
 
 namespace brdfa::server {
 
@@ -81,6 +82,7 @@ struct Service {
   std::unique_ptr<SessionManager> sessions;
   std::unique_ptr<JobManager> jobs;  // batch tests; its workers stop in beginShutdown
   HotLoader hotLoader;               // --hot-load; stops in beginShutdown
+  StaticFiles staticFiles;           // <root>/web, cached per file version with a gzip copy
   RenderSlots renderSlots{kMaxConcurrentRenders, kMaxQueuedRenders};
   // Requests that hold an HTTP worker for long (streams, frame waits) are capped below the
   // worker count so that short requests (stats, scene edits, health) always find a worker.
