@@ -98,9 +98,76 @@ std::vector<uint8_t> encodePng(const uint8_t* rgba8, int width, int height) {
   (void)kForcedSubFilter;
   std::vector<uint8_t> out;
   if (!rgba8 || width <= 0 || height <= 0) return out;
-  if (!stbi_write_png_to_func(appendToVector, &out, width, height, 4, rgba8, width * 4))
-    out.clear();
+  const size_t pixels = size_t(width) * height;
+  bool opaque = true;
+  for (size_t i = 0; i < pixels && opaque; ++i) opaque = rgba8[i * 4 + 3] == 255;
+  if (!opaque) {
+    if (!stbi_write_png_to_func(appendToVector, &out, width, height, 4, rgba8, width * 4)) out.clear();
+    return out;
+  }
+  // Rendered frames are opaque: RGB is a quarter less to compress, send and decode.
+  std::vector<uint8_t> rgb(pixels * 3);
+  for (size_t i = 0; i < pixels; ++i)
+    for (int c = 0; c < 3; ++c) rgb[i * 3 + c] = rgba8[i * 4 + c];
+  if (!stbi_write_png_to_func(appendToVector, &out, width, height, 3, rgb.data(), width * 3)) out.clear();
   return out;
+}
+
+namespace {
+
+void appendBigEndian32(std::vector<uint8_t>& out, uint32_t v) {
+  for (int shift = 24; shift >= 0; shift -= 8) out.push_back(static_cast<uint8_t>(v >> shift));
+}
+
+uint32_t readBigEndian32(const uint8_t* p) {
+  return (uint32_t(p[0]) << 24) | (uint32_t(p[1]) << 16) | (uint32_t(p[2]) << 8) | uint32_t(p[3]);
+}
+
+bool validKeyword(const std::string& k) {
+  if (k.empty() || k.size() > 79 || k.front() == ' ' || k.back() == ' ' || k.find("  ") != std::string::npos)
+    return false;
+  for (unsigned char c : k)
+    if (c < 32 || (c > 126 && c < 161)) return false;
+  return true;
+}
+
+constexpr size_t kPngSignatureAndHeader = 8 + 25;  // signature, then IHDR: length, type, 13 bytes, CRC
+
+}  // namespace
+
+std::vector<uint8_t> encodePng(const uint8_t* rgba8, int width, int height,
+                               const std::vector<std::pair<std::string, std::string>>& text) {
+  std::vector<uint8_t> png = encodePng(rgba8, width, height);
+  if (png.size() < kPngSignatureAndHeader) return png;
+  std::vector<uint8_t> chunks;
+  for (const auto& [keyword, value] : text) {
+    if (!validKeyword(keyword)) continue;
+    std::vector<uint8_t> body{'t', 'E', 'X', 't'};
+    body.insert(body.end(), keyword.begin(), keyword.end());
+    body.push_back(0);
+    body.insert(body.end(), value.begin(), value.end());
+    appendBigEndian32(chunks, static_cast<uint32_t>(body.size() - 4));
+    chunks.insert(chunks.end(), body.begin(), body.end());
+    appendBigEndian32(chunks, static_cast<uint32_t>(crc32(0, body.data(), static_cast<uInt>(body.size()))));
+  }
+  png.insert(png.begin() + kPngSignatureAndHeader, chunks.begin(), chunks.end());
+  return png;
+}
+
+std::string pngText(const std::vector<uint8_t>& png, const std::string& keyword) {
+  if (png.size() < 8 || std::memcmp(png.data(), "\x89PNG\r\n\x1a\n", 8) != 0) return {};
+  for (size_t at = 8; at + 12 <= png.size();) {
+    const uint32_t length = readBigEndian32(&png[at]);
+    if (length > png.size() - at - 12) return {};
+    const uint8_t* type = &png[at + 4];
+    const uint8_t* data = &png[at + 8];
+    if (std::memcmp(type, "IEND", 4) == 0) return {};
+    if (std::memcmp(type, "tEXt", 4) == 0 && length > keyword.size() &&
+        std::memcmp(data, keyword.data(), keyword.size()) == 0 && data[keyword.size()] == 0)
+      return std::string(reinterpret_cast<const char*>(data) + keyword.size() + 1, length - keyword.size() - 1);
+    at += 12 + size_t(length);
+  }
+  return {};
 }
 
 std::vector<uint8_t> encodePfm(const float* rgba32f, int width, int height) {

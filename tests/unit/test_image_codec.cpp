@@ -1,6 +1,8 @@
 // PNG and PFM encoders: round trips and on-disk row order.
 #include <gtest/gtest.h>
 
+#include <zlib.h>
+
 #include <cstring>
 #include <string>
 #include <vector>
@@ -63,6 +65,52 @@ TEST(Png, RoundTripsThroughStbImage) {
   EXPECT_EQ(channels, 4);
   EXPECT_EQ(std::memcmp(decoded, input.data(), input.size()), 0);
   stbi_image_free(decoded);
+}
+
+TEST(Png, OpaqueImagesAreWrittenAsRgbAndRoundTrip) {
+  const int w = 37, h = 23;
+  std::vector<uint8_t> input = testPattern(w, h);
+  for (size_t i = 3; i < input.size(); i += 4) input[i] = 255;
+  const std::vector<uint8_t> png = encodePng(input.data(), w, h);
+  ASSERT_GT(png.size(), 26u);
+  EXPECT_EQ(png[25], 2) << "IHDR colour type: 2 = RGB";
+
+  int dw = 0, dh = 0, channels = 0;
+  stbi_uc* decoded = stbi_load_from_memory(png.data(), int(png.size()), &dw, &dh, &channels, 4);
+  ASSERT_NE(decoded, nullptr) << stbi_failure_reason();
+  EXPECT_EQ(channels, 3);
+  EXPECT_EQ(std::memcmp(decoded, input.data(), input.size()), 0);
+  stbi_image_free(decoded);
+
+  input[5 * 4 + 3] = 254;  // one pixel not opaque: RGBA (colour type 6)
+  EXPECT_EQ(encodePng(input.data(), w, h)[25], 6);
+}
+
+TEST(Png, TextChunksTravelInsideTheFileAndStbStillDecodesIt) {
+  const int w = 5, h = 4;
+  const std::vector<uint8_t> input = testPattern(w, h);
+  const std::vector<uint8_t> png =
+      encodePng(input.data(), w, h, {{"brdfa:spp", "64"}, {"bad  keyword", "x"}, {"Comment", ""}});
+  EXPECT_EQ(pngText(png, "brdfa:spp"), "64");
+  EXPECT_EQ(pngText(png, "Comment"), "");
+  EXPECT_EQ(pngText(png, "bad  keyword"), "") << "an invalid keyword is left out";
+  EXPECT_EQ(pngText(png, "brdfa"), "") << "keywords match whole";
+  EXPECT_EQ(pngText(encodePng(input.data(), w, h), "brdfa:spp"), "");
+  EXPECT_EQ(pngText(std::vector<uint8_t>{1, 2, 3}, "brdfa:spp"), "");
+
+  int dw = 0, dh = 0, channels = 0;
+  stbi_uc* decoded = stbi_load_from_memory(png.data(), int(png.size()), &dw, &dh, &channels, 4);
+  ASSERT_NE(decoded, nullptr) << stbi_failure_reason();  // stb checks no CRCs, but the layout must hold
+  EXPECT_EQ(std::memcmp(decoded, input.data(), input.size()), 0);
+  stbi_image_free(decoded);
+
+  // Each chunk's CRC covers its type and data (zlib's crc32, as PNG specifies).
+  const size_t at = 33;  // after the signature and IHDR
+  const uint32_t length = (uint32_t(png[at]) << 24) | (uint32_t(png[at + 1]) << 16) | (uint32_t(png[at + 2]) << 8) | png[at + 3];
+  ASSERT_EQ(std::string(png.begin() + at + 4, png.begin() + at + 8), "tEXt");
+  const uint32_t crc = crc32(0, &png[at + 4], 4 + length);
+  const uint8_t* stored = &png[at + 8 + length];
+  EXPECT_EQ((uint32_t(stored[0]) << 24) | (uint32_t(stored[1]) << 16) | (uint32_t(stored[2]) << 8) | stored[3], crc);
 }
 
 TEST(Png, RejectsEmptyInput) {

@@ -3,13 +3,24 @@
 
 #include <cstdint>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace brdfa {
 
 // PNG of 8-bit RGBA rows (row 0 at the top). Uses zlib level 1 and the Sub filter: about 6x
-// faster than stb's defaults for a few percent larger files, which suits a live stream.
+// faster than stb's defaults for a few percent larger files, which suits a live stream. An
+// image whose alpha is 255 everywhere is written as RGB (colour type 2), else as RGBA.
 std::vector<uint8_t> encodePng(const uint8_t* rgba8, int width, int height);
+
+// The same with tEXt chunks (keyword, text) after the header, e.g. {"brdfa:spp", "64"}: data
+// that travels inside the file. A keyword must be 1-79 printable Latin-1 characters without a
+// leading, trailing or double space; pairs that are not are left out.
+std::vector<uint8_t> encodePng(const uint8_t* rgba8, int width, int height,
+                               const std::vector<std::pair<std::string, std::string>>& text);
+
+// The text of tEXt chunk `keyword` in a PNG, or "" when there is none (or it is not a PNG).
+std::string pngText(const std::vector<uint8_t>& png, const std::string& keyword);
 
 // Portable float map ("PF", RGB, little-endian, scale -1). PFM stores rows bottom to top; the
 // input is row 0 at the top, as everywhere else in this project.
