@@ -67,7 +67,8 @@ int runHttpBench(const std::string& serverBinary, const std::string& sourceDir) 
     if (i > 0) sliderMs.push_back(msSince(t0));  // the first switches back to ggx (cached program)
   }
 
-  // Stream: count the PNG parts received in a fixed window while the session renders.
+  // Stream: count the PNG parts received in a fixed window while the session renders. A part is
+  // complete when the boundary after it arrives (the next part's headers follow at once).
   int parts = 0;
   const double windowMs = 4000;
   auto streamCli = server.client(10);
@@ -75,7 +76,7 @@ int runHttpBench(const std::string& serverBinary, const std::string& sourceDir) 
   std::string carry;
   streamCli->Get("/api/sessions/default/stream", [&](const char* data, size_t len) {
     carry.append(data, len);
-    for (size_t at; (at = carry.find("Content-Type: image/png")) != std::string::npos;) {
+    for (size_t at; (at = carry.find("\r\n--frame\r\n")) != std::string::npos;) {
       ++parts;
       carry.erase(0, at + 1);
     }

@@ -1,5 +1,6 @@
 // Interactive sessions: create/list/delete, scene get/put/patch, frames, the PNG stream, stats.
 #include <charconv>
+#include <string_view>
 #include <cmath>
 
 #include "brdfa/image_codec.h"
@@ -75,6 +76,7 @@ std::optional<uint64_t> parseMinSpp(const std::string& text) {
 
 struct StreamState {
   uint64_t lastSeq = 0;
+  bool opened = false;  // the first part's boundary and headers were sent
   Session::Clock::time_point lastSent = Session::Clock::now();
 };
 
@@ -100,11 +102,16 @@ bool writeNextPart(Service& service, Session& session, StreamState& state, httpl
     if (!frame) return true;
   }
   const std::vector<uint8_t>& png = *frame->png;
-  std::string head = "--frame\r\nContent-Type: image/png\r\nContent-Length: " + std::to_string(png.size()) +
-                     "\r\nX-Samples: " + std::to_string(frame->spp) + "\r\n\r\n";
-  if (!sink.write(head.data(), head.size())) return false;
+  // Each part is followed at once by the next part's boundary and headers. Chromium's multipart
+  // parser finishes a part (and shows the image) only when it has parsed the headers of the
+  // next one: sent with the next frame, they would keep every frame off screen until the next
+  // frame arrives, and the converged frame until the 10 s resend. So the headers cannot hold
+  // per-frame data; the sample count is in the PNG (tEXt "brdfa:spp").
+  static constexpr std::string_view kPartHeaders = "--frame\r\nContent-Type: image/png\r\n\r\n";
+  if (!state.opened && !sink.write(kPartHeaders.data(), kPartHeaders.size())) return false;
+  state.opened = true;
   if (!sink.write(reinterpret_cast<const char*>(png.data()), png.size())) return false;
-  if (!sink.write("\r\n", 2)) return false;
+  if (!sink.write("\r\n", 2) || !sink.write(kPartHeaders.data(), kPartHeaders.size())) return false;
   state.lastSeq = frame->seq;
   state.lastSent = Session::Clock::now();
   return true;

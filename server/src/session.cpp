@@ -3,6 +3,7 @@
 #include <cstdio>
 
 #include "brdfa/image_codec.h"
+#include "brdfa/image_resample.h"
 
 namespace brdfa::server {
 
@@ -249,8 +250,21 @@ void Session::publishFrame(std::unique_lock<std::mutex>& lock) {
   }
   Frame& f = frame.value();
   if (f.width <= 0 || f.height <= 0 || f.rgba8.size() < static_cast<size_t>(f.width) * f.height * 4) return;
-  pendingRaw_ = RawFrame{std::move(f.rgba8), f.width, f.height, f.stats.spp, f.stats.sceneVersion};
+  pendingRaw_ = RawFrame{std::move(f.rgba8), f.width, f.height, f.stats.spp, f.stats.sceneVersion, f.stats.converged};
   encodeWake_.notify_one();
+}
+
+std::vector<uint8_t> Session::encodeStreamPng(const RawFrame& raw) {
+  // A stream part's headers go out before its frame exists (see the stream route), so the
+  // sample count travels inside the PNG.
+  const std::vector<std::pair<std::string, std::string>> text{{kSamplesPngKeyword, std::to_string(raw.spp)}};
+  // The converged frame is always full size, however few samples max_samples allows.
+  if (!raw.converged && raw.spp < kPreviewBelowSpp && raw.width * raw.height >= kPreviewMinPixels) {
+    int w = 0, h = 0;
+    std::vector<uint8_t> half = halveRgba8(raw.rgba8.data(), raw.width, raw.height, w, h);
+    if (!half.empty()) return encodePng(half.data(), w, h, text);
+  }
+  return encodePng(raw.rgba8.data(), raw.width, raw.height, text);
 }
 
 void Session::encodeLoop() {
@@ -263,7 +277,7 @@ void Session::encodeLoop() {
     RawFrame raw = std::move(*pendingRaw_);
     pendingRaw_.reset();
     lock.unlock();
-    auto png = std::make_shared<const std::vector<uint8_t>>(encodePng(raw.rgba8.data(), raw.width, raw.height));
+    auto png = std::make_shared<const std::vector<uint8_t>>(encodeStreamPng(raw));
     lock.lock();
     // A scene applied while the frame was read or encoded makes it stale: never show the old
     // scene after the new one.

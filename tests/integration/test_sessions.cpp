@@ -3,6 +3,7 @@
 #include <cmath>
 #include <thread>
 
+#include "brdfa/image_codec.h"
 #include "server_fixture.h"
 
 namespace brdfa::itest {
@@ -129,8 +130,10 @@ TEST_F(Sessions, MinSppBeyondMaxSamplesDoesNotHang) {
   EXPECT_LT(Clock::now() - t0, std::chrono::seconds(20));
 }
 
-// Reads multipart/x-mixed-replace parts from the stream until `want` complete PNG parts
-// arrived, checking the framing of each: boundary, headers, Content-Length bytes, CRLF.
+// Reads multipart/x-mixed-replace parts from the stream, checking the framing of each: the
+// boundary, a Content-Type: image/png header, a PNG body ending at CRLF + the next boundary
+// (which, with the next part's headers, the server sends right after each frame). The sample
+// count of each part comes from its PNG's tEXt chunk "brdfa:spp".
 struct PartReader {
   std::string buf;
   std::vector<std::string> pngs;
@@ -139,40 +142,29 @@ struct PartReader {
 
   // Returns false when the data cannot be multipart framing (then `error` says why).
   bool parse() {
+    static const std::string kHeaders = "--frame\r\nContent-Type: image/png\r\n\r\n";
+    static const std::string kEnd = "\r\n--frame\r\n";
     for (;;) {
-      size_t headEnd = buf.find("\r\n\r\n");
-      if (headEnd == std::string::npos) return true;
-      std::string head = buf.substr(0, headEnd);
-      if (head.rfind("--frame\r\n", 0) != 0) {
-        error = "part does not start with the boundary: " + head.substr(0, 40);
+      if (buf.size() < kHeaders.size()) return true;
+      if (buf.compare(0, kHeaders.size(), kHeaders) != 0) {
+        error = "part does not start with the boundary and its headers: " + buf.substr(0, 40);
         return false;
       }
-      auto header = [&](const std::string& name) -> std::string {
-        size_t p = head.find("\r\n" + name + ": ");
-        if (p == std::string::npos) return "";
-        size_t start = p + name.size() + 4;
-        return head.substr(start, head.find("\r\n", start) - start);
-      };
-      if (header("Content-Type") != "image/png") {
-        error = "part without Content-Type: image/png";
+      size_t end = buf.find(kEnd, kHeaders.size());
+      if (end == std::string::npos) return true;  // need more bytes
+      std::string png = buf.substr(kHeaders.size(), end - kHeaders.size());
+      if (png.compare(0, 8, std::string("\x89PNG\r\n\x1a\n", 8)) != 0) {
+        error = "part body is not a PNG";
         return false;
       }
-      std::string len = header("Content-Length");
-      if (len.empty()) {
-        error = "part without Content-Length";
+      std::string spp = pngText(std::vector<uint8_t>(png.begin(), png.end()), "brdfa:spp");
+      if (spp.empty()) {
+        error = "part PNG without its brdfa:spp text";
         return false;
       }
-      size_t n = std::stoull(len);
-      size_t bodyStart = headEnd + 4;
-      if (buf.size() < bodyStart + n + 2) return true;  // need more bytes
-      if (buf.compare(bodyStart + n, 2, "\r\n") != 0) {
-        error = "part body not followed by CRLF (Content-Length wrong?)";
-        return false;
-      }
-      pngs.push_back(buf.substr(bodyStart, n));
-      std::string spp = header("X-Samples");
-      samples.push_back(spp.empty() ? 0 : std::stoull(spp));
-      buf.erase(0, bodyStart + n + 2);
+      pngs.push_back(std::move(png));
+      samples.push_back(std::stoull(spp));
+      buf.erase(0, end + 2);  // keep the boundary: it starts the next part
     }
   }
 };
@@ -219,6 +211,67 @@ TEST_F(Sessions, StreamDeliversMultipartPngParts) {
   EXPECT_LT(Clock::now() - t0, std::chrono::seconds(5));
   for (uint64_t spp : second.samples) EXPECT_LE(spp, 8u) << "a frame of the previous scene";
   EXPECT_EQ(second.samples.back(), 8u);
+}
+
+// Width in the IHDR chunk of a PNG (bytes 16..19, big-endian); 0 when too short.
+uint32_t pngWidth(const std::string& png) {
+  if (png.size() < 24) return 0;
+  uint32_t w = 0;
+  for (int i = 16; i < 20; ++i) w = (w << 8) | static_cast<unsigned char>(png[i]);
+  return w;
+}
+
+// Reads the default session's stream from its start until the part with `lastSpp` samples.
+PartReader streamUntil(ServerProcess& server, uint64_t lastSpp) {
+  auto cli = server.client(20);
+  PartReader reader;
+  cli->Get("/api/sessions/default/stream", httplib::Headers{}, [&](const char* data, size_t len) {
+    reader.buf.append(data, len);
+    return reader.parse() && (reader.samples.empty() || reader.samples.back() < lastSpp);
+  });
+  return reader;
+}
+
+TEST_F(Sessions, StreamSendsHalfSizePreviewsUntilFourSamplesAndTheConvergedFrameFullSize) {
+  // 512x512, passes ramp 1, 2, 4, 4, 4, 1 samples up to 16.
+  auto r = put("/api/sessions/default/scene", furnaceScene("itest_lambert", json::object(), 512, 16, 4).dump());
+  ASSERT_TRUE(r && r->status == 200);
+  PartReader reader = streamUntil(*server_, 16);
+  ASSERT_TRUE(reader.error.empty()) << reader.error;
+  ASSERT_FALSE(reader.pngs.empty());
+  EXPECT_EQ(reader.samples.back(), 16u);
+  bool sawPreview = false;
+  for (size_t i = 0; i < reader.pngs.size(); ++i) {
+    const bool preview = reader.samples[i] < 4;
+    sawPreview = sawPreview || preview;
+    EXPECT_EQ(pngWidth(reader.pngs[i]), preview ? 256u : 512u) << "part " << i << " at " << reader.samples[i] << " spp";
+  }
+  // A client that connects at once gets the first pass (1 spp) as its first part.
+  if (reader.samples.front() == 1) {
+    EXPECT_TRUE(sawPreview);
+  }
+
+  // With max_samples 2 the converged frame has 2 samples and still comes full size.
+  r = put("/api/sessions/default/scene", furnaceScene("itest_lambert", {{"Kd", {0.5, 0.5, 0.5}}}, 512, 2, 4).dump());
+  ASSERT_TRUE(r && r->status == 200);
+  PartReader converged = streamUntil(*server_, 2);
+  ASSERT_FALSE(converged.pngs.empty()) << converged.error;
+  EXPECT_EQ(converged.samples.back(), 2u);
+  EXPECT_EQ(pngWidth(converged.pngs.back()), 512u);
+
+  // Small frames are never halved: a 128x128 first pass comes at 128.
+  r = put("/api/sessions/default/scene", furnaceScene("itest_lambert", json::object(), 128, 1, 1).dump());
+  ASSERT_TRUE(r && r->status == 200);
+  PartReader small = streamUntil(*server_, 1);
+  ASSERT_FALSE(small.pngs.empty()) << small.error;
+  EXPECT_EQ(pngWidth(small.pngs.back()), 128u);
+
+  // The frame endpoint always answers full size.
+  r = put("/api/sessions/default/scene", furnaceScene("itest_lambert", json::object(), 512, 64, 1).dump());
+  ASSERT_TRUE(r && r->status == 200);
+  r = get("/api/sessions/default/frame?format=png&min_spp=1");
+  ASSERT_TRUE(r && r->status == 200);
+  EXPECT_EQ(pngWidth(r->body), 512u);
 }
 
 TEST_F(Sessions, TwoSessionsKeepSeparateScenes) {

@@ -25,7 +25,7 @@ namespace brdfa::server {
 
 // The latest PNG published for stream clients. `seq` grows with every publication.
 struct StreamFrame {
-  std::shared_ptr<const std::vector<uint8_t>> png;
+  std::shared_ptr<const std::vector<uint8_t>> png;  // may be a half-size preview (Session::kPreviewBelowSpp)
   uint64_t seq = 0;
   uint64_t spp = 0;
 };
@@ -102,6 +102,15 @@ class Session {
 
   // Minimum interval between published stream frames (about 30 per second).
   static constexpr std::chrono::milliseconds kPublishInterval{33};
+  // Stream frames with fewer samples than this (the first passes after a change: 1, then 3)
+  // are sent at half resolution when the frame has at least kPreviewMinPixels and is not the
+  // converged one: they are mostly noise, and the full-size PNG of noise is what costs the most
+  // to encode, send and decode. A progressive preview, as in Cycles' viewport; the <img> scales
+  // it to the view. /frame always answers full size.
+  static constexpr uint64_t kPreviewBelowSpp = 4;
+  // tEXt keyword of each stream PNG that holds its samples per pixel.
+  static constexpr const char* kSamplesPngKeyword = "brdfa:spp";
+  static constexpr int kPreviewMinPixels = 256 * 256;
 
  private:
   void renderLoop();
@@ -149,8 +158,10 @@ class Session {
     std::vector<uint8_t> rgba8;
     int width = 0, height = 0;
     uint64_t spp = 0, sceneVersion = 0;
+    bool converged = false;
   };
   std::optional<RawFrame> pendingRaw_;
+  static std::vector<uint8_t> encodeStreamPng(const RawFrame& raw);
   std::condition_variable encodeWake_;
 
   std::mutex joinMutex_;  // DELETE and server shutdown may both stop a session; one joins
