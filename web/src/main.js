@@ -1,8 +1,8 @@
 // Entry point (bundled by build.mjs into dist/main.js): mounts the panels, then finds this tab's
 // session and loads the BRDF its first object uses. Panels only meet through state.js.
-// The editor (CodeMirror) is a dynamic import: the session and its stream start without
-// waiting for it, so the first frame is on screen sooner.
-import { state, set } from './state.js';
+// The editor (CodeMirror, 430 KB) is a dynamic import started once the first frame is on screen
+// (or after 1.5 s): on a small machine, parsing it would compete with the first pass for the CPU.
+import { state, set, on } from './state.js';
 import { startSession, mountSessionPanel } from './panels/session.js';
 import { mountViewer } from './panels/viewer.js';
 import { mountCamera } from './panels/camera.js';
@@ -31,7 +31,8 @@ mountTests($('tests'));
 mountFrameSaver($('frame-saver'));
 mountObjects($('objects'));
 mountEnvironment($('environment'));
-const editor = import('./panels/editor.js').then((m) => m.mountEditor($('editor'), $('library')));
+const firstFrame = new Promise((resolve) => { on('firstFrame', resolve); setTimeout(resolve, 1500); });
+const editor = firstFrame.then(() => import('./panels/editor.js')).then((m) => m.mountEditor($('editor'), $('library')));
 
 (async () => {
   try {

@@ -16,6 +16,7 @@ export const state = {
   tab: '',            // the right-hand column's page (tabs.js)
   visible: document.visibilityState === 'visible',   // document.visibilityState === 'visible': a hidden tab pauses stream and stats
   speeds: { move: 1.5, look: 0.25 },  // camera: units per second, degrees per pixel (UI only)
+  firstFrame: false,  // the viewer has shown a frame since the page loaded
 };
 
 const listeners = new Map();

@@ -1,7 +1,7 @@
 // Viewer: the session's live PNG stream in an <img> (multipart/x-mixed-replace), with spp,
 // elapsed time, relative error and frames per second overlaid.
 import * as api from '../api.js';
-import { state, on } from '../state.js';
+import { state, set, on } from '../state.js';
 import { pct, fixed, seconds } from '../format.js';
 
 export function mountViewer(el) {
@@ -17,6 +17,8 @@ export function mountViewer(el) {
   };
   // A dropped stream (server restart, network) reconnects after a pause.
   img.addEventListener('error', () => { if (live) retry = setTimeout(connect, 1000); });
+  // An <img> fires `load` once, for the first part of a multipart stream.
+  img.addEventListener('load', () => { if (!state.firstFrame) set({ firstFrame: true }); });
   img.draggable = false;   // left-drag looks around (camera panel), never drags the image
   on('session', connect);
   // A hidden tab closes its stream, so a background tab does not keep its session rendering
