@@ -7,8 +7,13 @@ import * as api from '../api.js';
 import { state, set, on } from '../state.js';
 import { coalesce } from '../coalesce.js';
 import { refreshAssets } from '../library.js';
+import { backOff, backOffToFit, centreOn } from '../camera-math.js';
 
 const MAX_TEXTURES = 4;
+// Bounding radius of each built-in mesh at scale 1 (renderer/src/meshes.cpp: the teapot is
+// scaled to radius 1, the cube and plane span -1..1); an upload's is not known here.
+const MESH_RADIUS = { sphere: 1, dense_sphere: 1, torus: 1, teapot: 1, plane: Math.SQRT2, cube: Math.sqrt(3) };
+const UPLOAD_RADIUS = 1.75;
 const texName = (t) => (typeof t === 'string' ? t : t?.name);
 
 export function mountObjects(el) {
@@ -96,7 +101,20 @@ export function mountObjects(el) {
     const base = all[sel] || { translate: [0, 0, 0] };
     all.push({ mesh: 'sphere', brdf: base.brdf || 'lambert', translate: [base.translate[0] + 2.2, base.translate[1], base.translate[2]] });
     state.scene.objects = all;
-    send({ objects: all });
+    // Beside the selected object, which may put it outside the view: if so, the camera (same
+    // direction) centres the objects and backs off until every one is in the frame.
+    const cam = state.scene.camera;
+    const spheres = all.map((o) => ({
+      center: o.translate || [0, 0, 0],
+      radius: (MESH_RADIUS[o.mesh] || UPLOAD_RADIUS) * Math.max(...(o.scale || [1, 1, 1])),
+    }));
+    const aspect = state.scene.render.width / state.scene.render.height;
+    const patch = { objects: all };
+    if (backOffToFit(cam, spheres, aspect) > 0) {
+      const centred = { ...cam, position: centreOn(cam, spheres.map((b) => b.center)) };
+      patch.camera = { position: backOff(centred.position, cam.yaw, cam.pitch, backOffToFit(centred, spheres, aspect)) };
+    }
+    send(patch);
     select(all.length - 1);
   });
   $('.obj-remove').addEventListener('click', () => {
