@@ -60,6 +60,19 @@ async function settle(env, page, sid) {
   });
 }
 
+/** A world point in normalized device coordinates of the scene's camera (renderer convention:
+ *  yaw about +Y with 0 looking down -Z, pitch up; fov vertical). z: depth along the view. */
+function project(camera, point, aspect) {
+  const y = (camera.yaw * Math.PI) / 180, p = (camera.pitch * Math.PI) / 180;
+  const f = [-Math.sin(y) * Math.cos(p), Math.sin(p), -Math.cos(y) * Math.cos(p)];
+  const r = [Math.cos(y), 0, -Math.sin(y)];
+  const u = [r[1] * f[2] - r[2] * f[1], r[2] * f[0] - r[0] * f[2], r[0] * f[1] - r[1] * f[0]];
+  const d = point.map((v, i) => v - camera.position[i]);
+  const dot = (a, b) => a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+  const z = dot(d, f), t = Math.tan((camera.fov * Math.PI) / 360);
+  return { x: dot(d, r) / (z * t * aspect), y: dot(d, u) / (z * t), z };
+}
+
 const shot = (env, page, name) => page.screenshot({ path: join(env.artifacts, `${name}.png`) });
 const compiles = async (env) => (await http(env, 'GET', '/api/health')).compiler.glsl_compiles;
 
@@ -292,19 +305,112 @@ export const checks = [
     await shot(env, page, '08-saved-preset');
   }],
 
+  ['New, the unsaved-changes warning, Revert and Delete in the library', async (env) => {
+    const { page, sid } = env;
+    const scratch = `scratch-${sid}`;
+    // CodeMirror keeps the whole text in its state (the DOM holds only the lines in view).
+    const editorText = () => page.evaluate(() => {
+      const content = document.querySelector('.cm-content');
+      const view = content.cmTile?.root?.view ?? content.cmView?.view;   // EditorView.findFromDOM, from outside the bundle
+      return view.state.doc.toString();
+    });
+    const saved = (await http(env, 'GET', '/api/brdfs/ui_saved')).source;
+    assert.equal(await editorText(), saved, 'the editor holds ui_saved (from Save as)');
+    // An edit at the end of the text: unsaved, and shown as such.
+    await page.click('.cm-content');
+    await page.keyboard.press('Control+End');
+    await page.keyboard.type('\n// an edit');
+    await until('the unsaved marker', async () => (await page.locator('#library .library-state').textContent()).includes('unsaved'));
+
+    // New with unsaved text asks first; dismissing keeps the text.
+    const dialogs = [];
+    const answer = (accept) => page.once('dialog', (d) => { dialogs.push(d.message()); return accept ? d.accept() : d.dismiss(); });
+    answer(false);
+    await page.click('#library .lib-new');
+    await until('the discard question', async () => dialogs.length === 1);
+    assert.match(dialogs[0], /unsaved changes/);
+    assert.ok((await editorText()).endsWith('// an edit'), 'dismissing keeps the edited text');
+
+    // Revert (confirmed) brings back the stored text.
+    answer(true);
+    await page.click('#library .lib-revert');
+    await until('the saved text back', async () => (await editorText()) === saved);
+    assert.match(dialogs[1], /Revert/);
+
+    // New: the template, compiled into this tab's scratch BRDF, which the object now renders.
+    await page.click('#library .lib-new');
+    await until('the template', async () => (await editorText()).startsWith('analytic'));
+    assert.equal(dialogs.length, 2, 'nothing to discard after Revert: no question');
+    await until('the object to render the template', async () =>
+      (await http(env, 'GET', `/api/sessions/${sid}/scene`)).objects[0].brdf === scratch);
+
+    // Open ui_saved again, then Delete it (confirmed): gone from the server and the list, and
+    // the object keeps rendering its text as the scratch copy.
+    await page.selectOption('#library .library-list', 'ui_saved');
+    await until('ui_saved in use', async () => (await http(env, 'GET', `/api/sessions/${sid}/scene`)).objects[0].brdf === 'ui_saved');
+    answer(true);
+    await page.click('#library .lib-delete');
+    await until('ui_saved deleted', async () => (await fetch(`${env.server.url}/api/brdfs/ui_saved`)).status === 404);
+    assert.match(dialogs[2], /Delete "ui_saved"/);
+    assert.equal((await http(env, 'GET', `/api/sessions/${sid}/scene`)).objects[0].brdf, scratch);
+    assert.equal((await http(env, 'GET', `/api/brdfs/${scratch}`)).source, saved, 'the scratch copy holds the deleted text');
+    await until('the list to drop it', async () =>
+      !(await page.locator('#library .library-list option').allTextContents()).some((t) => t.startsWith('ui_saved')));
+    await shot(env, page, '09-library');
+  }],
+
   ['the objects panel adds and removes objects (one always stays)', async (env) => {
     const { page, sid } = env;
     await page.click('.tabs [data-tab="tab-objects"]');
     assert.equal(await page.locator('#objects .obj-remove').isDisabled(), true, 'the only object cannot be removed');
     await page.click('#objects .obj-add');
-    await until('two objects', async () => (await http(env, 'GET', `/api/sessions/${sid}/scene`)).objects.length === 2);
+    const scene = await until('two objects', async () => {
+      const sc = await http(env, 'GET', `/api/sessions/${sid}/scene`);
+      return sc.objects.length === 2 && sc;
+    });
+    // Both objects' centres project inside the image (the camera backed off if it had to).
+    for (const o of scene.objects) {
+      const ndc = project(scene.camera, o.translate, scene.render.width / scene.render.height);
+      assert.ok(ndc.z > 0 && Math.abs(ndc.x) < 1 && Math.abs(ndc.y) < 1, `object at ${o.translate} is in view (${JSON.stringify(ndc)})`);
+    }
     await page.selectOption('#objects .obj-mesh', 'cube');
     await until('the second object to be a cube', async () =>
       (await http(env, 'GET', `/api/sessions/${sid}/scene`)).objects[1].mesh === 'cube');
-    await shot(env, page, '09-objects');
+    await shot(env, page, '10-objects');
     await page.click('#objects .obj-remove');
     await until('one object', async () => (await http(env, 'GET', `/api/sessions/${sid}/scene`)).objects.length === 1);
     assert.equal(await page.locator('#objects .obj-remove').isDisabled(), true);
+    await page.click('.tabs [data-tab="tab-editor"]');
+  }],
+
+  ['the objects panel uploads a mesh and a texture, and the frame shows them', async (env) => {
+    const { page, sid } = env;
+    await page.click('.tabs [data-tab="tab-objects"]');
+    const before = await settle(env, page, sid);
+    // A tetrahedron (no normals, no UVs: the server makes them).
+    const obj = 'v 0 1 0\nv -1 -0.6 0.8\nv 1 -0.6 0.8\nv 0 -0.6 -1\nf 1 2 3\nf 1 3 4\nf 1 4 2\nf 2 4 3\n';
+    await page.setInputFiles('#objects .obj-mesh-upload', { name: 'tetra.obj', mimeType: 'text/plain', buffer: Buffer.from(obj) });
+    const mesh = await until('the object to use the uploaded mesh', async () => {
+      const m = (await http(env, 'GET', `/api/sessions/${sid}/scene`)).objects[0].mesh;
+      return m !== 'sphere' && m;
+    });
+    const listed = await http(env, 'GET', '/api/assets?kind=mesh');
+    assert.ok(listed.some((a) => a.id === mesh && a.name === 'tetra.obj'), `the upload is listed as ${mesh}`);
+    await env.waitForFrame(page, { before, threshold: 0.5 });
+
+    // A texture: a PNG of part of the page, bound to the object's first slot.
+    const png = await page.screenshot({ clip: { x: 0, y: 0, width: 64, height: 64 } });
+    await page.setInputFiles('#objects .obj-tex-upload', { name: 'patch.png', mimeType: 'image/png', buffer: png });
+    const texture = await until('the texture listed', async () =>
+      (await http(env, 'GET', '/api/assets?kind=texture')).find((a) => a.name === 'patch.png'));
+    await until('the texture bound to the first slot', async () => {
+      const t = (await http(env, 'GET', `/api/sessions/${sid}/scene`)).objects[0].textures || [];
+      return t.length === 1 && (typeof t[0] === 'string' ? t[0] : t[0].name) === texture.id;
+    });
+    assert.equal(await page.locator('#objects .obj-status.error').count(), 0, 'no error shown');
+    await shot(env, page, '11-uploads');
+    // Back to the sphere for the checks after this one.
+    await http(env, 'PATCH', `/api/sessions/${sid}/scene`, { objects: [{ mesh: 'sphere', brdf: (await http(env, 'GET', `/api/sessions/${sid}/scene`)).objects[0].brdf }] });
     await page.click('.tabs [data-tab="tab-editor"]');
   }],
 
@@ -323,7 +429,7 @@ export const checks = [
       const e = await envNow();
       return e.intensity === 2 && e.rotation === 90 && e.visible === false;
     });
-    await shot(env, page, '10-environment');
+    await shot(env, page, '12-environment');
     await page.click('.tabs [data-tab="tab-editor"]');
   }],
 
