@@ -414,7 +414,7 @@ export const checks = [
     await page.click('.tabs [data-tab="tab-editor"]');
   }],
 
-  ['the environment panel chooses an environment, intensity, rotation and visibility', async (env) => {
+  ['the environment panel chooses or uploads an environment, sets intensity, rotation and visibility', async (env) => {
     const { page, sid } = env;
     await page.click('.tabs [data-tab="tab-environment"]');
     const envNow = async () => (await http(env, 'GET', `/api/sessions/${sid}/scene`)).environment;
@@ -429,6 +429,15 @@ export const checks = [
       const e = await envNow();
       return e.intensity === 2 && e.rotation === 90 && e.visible === false;
     });
+    // An uploaded equirect HDR (flat RGBE scanlines, 16 x 8: upper half 2.0, lower half black)
+    // becomes the environment.
+    const rows = [];
+    for (let y = 0; y < 8; ++y) for (let x = 0; x < 16; ++x) rows.push(...(y < 4 ? [128, 128, 128, 130] : [0, 0, 0, 0]));
+    const hdr = Buffer.concat([Buffer.from('#?RADIANCE\nFORMAT=32-bit_rle_rgbe\n\n-Y 8 +X 16\n'), Buffer.from(rows)]);
+    await page.setInputFiles('#environment .env-upload', { name: 'half.hdr', mimeType: 'application/octet-stream', buffer: hdr });
+    const uploaded = await until('the upload listed', async () =>
+      (await http(env, 'GET', '/api/assets?kind=environment')).find((a) => a.name === 'half.hdr'));
+    await until('the scene to use it', async () => (await envNow()).name === uploaded.id);
     await shot(env, page, '12-environment');
     await page.click('.tabs [data-tab="tab-editor"]');
   }],
