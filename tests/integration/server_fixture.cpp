@@ -101,6 +101,20 @@ vec3 BRDF(vec3 L, vec3 V, vec3 N, vec3 X, vec3 Y)
 ::end shader
 )";
 
+// A textured Lambertian (iTexture0 scales Kd): under the furnace an object shows its texture.
+const char* const kTexturedLambert = R"(analytic
+::begin parameters
+color Kd 1 1 1
+::end parameters
+::begin shader
+const float kPi = 3.14159265358979323846;
+vec3 BRDF(vec3 L, vec3 V, vec3 N, vec3 X, vec3 Y)
+{
+    return Kd * texture(iTexture0, texCoord).rgb / kPi;
+}
+::end shader
+)";
+
 // Line 9 of this text is the broken one.
 const char* const kSyntaxErrorOnLine9 = R"(analytic
 ::begin parameters

@@ -130,18 +130,6 @@ httplib::MultipartFormDataItems form(const std::string& bytes, const std::string
   return items;
 }
 
-// Samples a BRDF texture so that a textured object shows its texture under the furnace.
-const char* const kTexturedBrdf = R"(analytic
-::begin parameters
-float gain 0 2 1
-::end parameters
-::begin shader
-vec3 BRDF(vec3 L, vec3 V, vec3 N, vec3 X, vec3 Y)
-{
-    return gain * texture(iTexture0, texCoord).rgb / 3.14159265358979;
-}
-::end shader
-)";
 
 class Assets : public ::testing::Test {
  protected:
@@ -288,7 +276,7 @@ class Assets : public ::testing::Test {
 
 TEST_F(Assets, EveryTypeUploadsListsRendersAndSurvivesARestart) {
   start();
-  auto brdf = server().client()->Put("/api/brdfs/itest_textured", kTexturedBrdf, "text/plain");
+  auto brdf = server().client()->Put("/api/brdfs/itest_textured", kTexturedLambert, "text/plain");
   ASSERT_TRUE(brdf && brdf->status == 201) << (brdf ? brdf->body : "");
   std::vector<std::pair<AssetType, std::string>> uploaded;
   for (const AssetType& type : assetTypes()) {

@@ -121,20 +121,6 @@ TEST_F(Scenes, UploadedHdrHemisphereLightsALambertSphereAsTheIrradianceIntegralS
   EXPECT_LT(std::fabs(signedSum / tested), 0.001);
 }
 
-// A textured Lambertian (iTexture0 scales Kd), saved to the library for the session to use.
-const char* const kTexturedLambert = R"(analytic
-::begin parameters
-color Kd 1 1 1
-::end parameters
-::begin shader
-const float kPi = 3.14159265358979323846;
-vec3 BRDF(vec3 L, vec3 V, vec3 N, vec3 X, vec3 Y)
-{
-    return Kd * texture(iTexture0, texCoord).rgb / kPi;
-}
-::end shader
-)";
-
 TEST_F(Scenes, ThreeObjectsWithThreeBrdfsAndTexturesRenderAndCountTheirVertices) {
   auto saved = put("/api/brdfs/textured_lambert", kTexturedLambert, "text/plain");
   ASSERT_TRUE(saved && (saved->status == 200 || saved->status == 201)) << (saved ? saved->body : "no response");
