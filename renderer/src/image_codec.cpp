@@ -7,6 +7,9 @@
 #include <cstdlib>
 #include <cstring>
 #include <string>
+#include <string_view>
+
+#include "image_structure.h"
 
 namespace {
 
@@ -119,10 +122,6 @@ void appendBigEndian32(std::vector<uint8_t>& out, uint32_t v) {
   for (int shift = 24; shift >= 0; shift -= 8) out.push_back(static_cast<uint8_t>(v >> shift));
 }
 
-uint32_t readBigEndian32(const uint8_t* p) {
-  return (uint32_t(p[0]) << 24) | (uint32_t(p[1]) << 16) | (uint32_t(p[2]) << 8) | uint32_t(p[3]);
-}
-
 bool validKeyword(const std::string& k) {
   if (k.empty() || k.size() > 79 || k.front() == ' ' || k.back() == ' ' || k.find("  ") != std::string::npos)
     return false;
@@ -156,18 +155,15 @@ std::vector<uint8_t> encodePng(const uint8_t* rgba8, int width, int height,
 
 std::string pngText(const std::vector<uint8_t>& png, const std::string& keyword) {
   if (png.size() < 8 || std::memcmp(png.data(), "\x89PNG\r\n\x1a\n", 8) != 0) return {};
-  for (size_t at = 8; at + 12 <= png.size();) {
-    const uint32_t length = readBigEndian32(&png[at]);
-    if (length > png.size() - at - 12) return {};
-    const uint8_t* type = &png[at + 4];
-    const uint8_t* data = &png[at + 8];
-    if (std::memcmp(type, "IEND", 4) == 0) return {};
-    if (std::memcmp(type, "tEXt", 4) == 0 && length > keyword.size() &&
-        std::memcmp(data, keyword.data(), keyword.size()) == 0 && data[keyword.size()] == 0)
-      return std::string(reinterpret_cast<const char*>(data) + keyword.size() + 1, length - keyword.size() - 1);
-    at += 12 + size_t(length);
-  }
-  return {};
+  std::string text;
+  walkPngChunks(std::string_view(reinterpret_cast<const char*>(png.data()), png.size()), [&](const PngChunk& c) {
+    // tEXt data: keyword, a NUL, the text.
+    const bool match = c.type == "tEXt" && c.data.size() > keyword.size() && c.data.substr(0, keyword.size()) == keyword &&
+                       c.data[keyword.size()] == '\0';
+    if (match) text = c.data.substr(keyword.size() + 1);
+    return !match;
+  });
+  return text;
 }
 
 std::vector<uint8_t> encodePfm(const float* rgba32f, int width, int height) {

@@ -19,30 +19,52 @@ Error corrupt(const char* format, const std::string& what) {
 }
 
 // A chunk type as text when it is four letters (as valid ones are), else as "unknown".
-std::string chunkName(const unsigned char* type) {
-  for (int i = 0; i < 4; ++i)
-    if (!std::isalpha(type[i])) return "an unknown";
-  return "the " + std::string(reinterpret_cast<const char*>(type), 4);
+std::string chunkName(std::string_view type) {
+  for (char c : type)
+    if (!std::isalpha(static_cast<unsigned char>(c))) return "an unknown";
+  return "the " + std::string(type);
 }
 
 }  // namespace
 
-Result<void> checkPngStructure(std::string_view bytes) {
+PngWalk walkPngChunks(std::string_view bytes, const std::function<bool(const PngChunk&)>& visit) {
   const auto* data = reinterpret_cast<const unsigned char*>(bytes.data());
   const size_t size = bytes.size();
-  size_t pos = 8;  // after the signature, which the caller has checked
-  while (pos < size) {
-    // Each chunk: 4-byte length, 4-byte type, data, 4-byte CRC of type and data (PNG spec 5.3).
-    if (size - pos < 12) return corrupt("PNG", "it ends inside a chunk header (truncated?)");
-    uint32_t length = readBigEndian32(data + pos);
-    const unsigned char* type = data + pos + 4;
-    if (length > size - pos - 12)
-      return corrupt("PNG", "it ends inside " + chunkName(type) + " chunk (truncated?)");
-    uint32_t expected = readBigEndian32(data + pos + 8 + length);
-    uint32_t actual = static_cast<uint32_t>(crc32(crc32(0L, Z_NULL, 0), type, length + 4));
-    if (actual != expected) return corrupt("PNG", chunkName(type) + " chunk fails its CRC check");
-    if (std::string_view(reinterpret_cast<const char*>(type), 4) == "IEND") return {};
+  for (size_t pos = 8; pos < size;) {
+    // Each chunk: 4-byte length, 4-byte type, data, 4-byte CRC of type and data.
+    if (size - pos < 12) return {PngWalk::End::TruncatedHeader, {}};
+    const uint32_t length = readBigEndian32(data + pos);
+    const std::string_view type = bytes.substr(pos + 4, 4);
+    if (length > size - pos - 12) return {PngWalk::End::TruncatedChunk, type};
+    const PngChunk chunk{type, bytes.substr(pos + 8, length), readBigEndian32(data + pos + 8 + length)};
+    if (!visit(chunk)) return {PngWalk::End::Stopped, type};
+    if (type == "IEND") return {PngWalk::End::Iend, {}};
     pos += 12 + size_t(length);
+  }
+  return {PngWalk::End::NoIend, {}};
+}
+
+Result<void> checkPngStructure(std::string_view bytes) {
+  // The signature was checked by the caller.
+  std::string_view badCrc;
+  const PngWalk walk = walkPngChunks(bytes, [&](const PngChunk& c) {
+    const auto* typeAndData = reinterpret_cast<const unsigned char*>(c.type.data());
+    const auto actual = static_cast<uint32_t>(crc32(crc32(0L, Z_NULL, 0), typeAndData, uInt(4 + c.data.size())));
+    if (actual == c.storedCrc) return true;
+    badCrc = c.type;
+    return false;
+  });
+  switch (walk.end) {
+    case PngWalk::End::Iend:
+      return {};
+    case PngWalk::End::Stopped:
+      return corrupt("PNG", chunkName(badCrc) + " chunk fails its CRC check");
+    case PngWalk::End::TruncatedHeader:
+      return corrupt("PNG", "it ends inside a chunk header (truncated?)");
+    case PngWalk::End::TruncatedChunk:
+      return corrupt("PNG", "it ends inside " + chunkName(walk.type) + " chunk (truncated?)");
+    case PngWalk::End::NoIend:
+      break;
   }
   return corrupt("PNG", "it ends before its IEND chunk (truncated?)");
 }

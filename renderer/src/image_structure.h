@@ -5,11 +5,31 @@
 // and say what is wrong, so a damaged upload is refused with a reason.
 #pragma once
 
+#include <cstdint>
+#include <functional>
 #include <string_view>
 
 #include "brdfa/result.h"
 
 namespace brdfa {
+
+// One chunk of a PNG (PNG spec 5.3): its 4-byte type, its data, and the CRC stored after them.
+struct PngChunk {
+  std::string_view type;
+  std::string_view data;  // directly follows `type` in the file, as the CRC covers both
+  uint32_t storedCrc = 0;
+};
+
+// How a walk over a PNG's chunks ended: at IEND, because `visit` said stop, or at data that
+// cannot be a chunk (the header or the chunk `type` runs past the end, or no IEND at all).
+struct PngWalk {
+  enum class End { Iend, Stopped, TruncatedHeader, TruncatedChunk, NoIend } end;
+  std::string_view type;  // the chunk that runs past the end (TruncatedChunk)
+};
+
+// Visits the chunks after the 8-byte signature in order, IEND included, while `visit` returns
+// true. Never reads outside `bytes`; checks no CRC (the visitor may).
+PngWalk walkPngChunks(std::string_view bytes, const std::function<bool(const PngChunk&)>& visit);
 
 // PNG: every chunk lies inside the data, its CRC-32 matches, and IEND is reached.
 Result<void> checkPngStructure(std::string_view bytes);
