@@ -1,7 +1,7 @@
 // Interactive sessions: create/list/delete, scene get/put/patch, frames, the PNG stream, stats.
 #include <charconv>
-#include <string_view>
 #include <cmath>
+#include <string_view>
 
 #include "brdfa/image_codec.h"
 #include "brdfa_server/http_errors.h"

@@ -108,9 +108,9 @@ class Session {
   // to encode, send and decode. A progressive preview, as in Cycles' viewport; the <img> scales
   // it to the view. /frame always answers full size.
   static constexpr uint64_t kPreviewBelowSpp = 4;
+  static constexpr int kPreviewMinPixels = 256 * 256;
   // tEXt keyword of each stream PNG that holds its samples per pixel.
   static constexpr const char* kSamplesPngKeyword = "brdfa:spp";
-  static constexpr int kPreviewMinPixels = 256 * 256;
 
  private:
   void renderLoop();
@@ -160,8 +160,9 @@ class Session {
     uint64_t spp = 0, sceneVersion = 0;
     bool converged = false;
   };
-  std::optional<RawFrame> pendingRaw_;
+  // The stream PNG of `raw`: a half-size preview below kPreviewBelowSpp, its spp in a tEXt chunk.
   static std::vector<uint8_t> encodeStreamPng(const RawFrame& raw);
+  std::optional<RawFrame> pendingRaw_;
   std::condition_variable encodeWake_;
 
   std::mutex joinMutex_;  // DELETE and server shutdown may both stop a session; one joins
