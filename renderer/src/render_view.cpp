@@ -313,7 +313,8 @@ Result<void> RenderViewImpl::setScene(const Scene& scene) {
   const bool displayChanged = !hasScene_ || scene.render.exposure != scene_.render.exposure ||
                               scene.render.toneMap != scene_.render.toneMap ||
                               scene.render.samplesPerFrame != scene_.render.samplesPerFrame ||
-                              scene.render.maxSamples != scene_.render.maxSamples;
+                              scene.render.maxSamples != scene_.render.maxSamples ||
+                              scene.render.targetError != scene_.render.targetError;
 
   const glm::mat4 viewProj = cameraFrame(scene.camera, width, height).viewProj;
   for (size_t i = 0; i < objects.size(); ++i)
@@ -346,8 +347,16 @@ Result<void> RenderViewImpl::setScene(const Scene& scene) {
     programs.push_back(o.kernel->programHash);
     stats_.programBytes += o.kernel->spirvBytes;
   }
-  stats_.converged = stats_.spp >= static_cast<uint64_t>(scene_.render.maxSamples);
+  updateDone();
   return {};
+}
+
+void RenderViewImpl::updateDone() {
+  stats_.maxSamplesReached = stats_.spp >= static_cast<uint64_t>(scene_.render.maxSamples);
+  // Below kMinSppForTarget the estimate rests on too few samples per half: a rare bright
+  // direction (the sun) that neither half has met yet would read as no error at all.
+  const double target = scene_.render.targetError;
+  stats_.converged = target > 0 && stats_.spp >= kMinSppForTarget && stats_.relError && *stats_.relError <= target;
 }
 
 ComputePush RenderViewImpl::basePush() const {
@@ -497,6 +506,8 @@ void RenderViewImpl::setRelError(const ErrorSums& sums) {
     stats_.relError = e;
   else
     stats_.relError.reset();
+  stats_.relErrorSpp = stats_.spp;
+  stats_.relErrorElapsedMs = stats_.elapsedMs;
   sinceErrorMs_ = 0;
 }
 
@@ -504,10 +515,8 @@ Result<FrameStats> RenderViewImpl::renderPass() {
   std::lock_guard<std::mutex> lock(mutex_);
   if (!hasScene_) return makeError(ErrorCode::InvalidArgument, "no scene has been set");
   const uint64_t maxSamples = static_cast<uint64_t>(scene_.render.maxSamples);
-  if (stats_.spp >= maxSamples) {
-    stats_.converged = true;
-    return stats_;
-  }
+  updateDone();
+  if (stats_.done()) return stats_;
   const auto t0 = std::chrono::steady_clock::now();
   // Passes after a restart ramp up 1, 2, 4, ... samples to samples_per_frame, so the first
   // frame of a change arrives quickly.
@@ -564,10 +573,10 @@ Result<FrameStats> RenderViewImpl::renderPass() {
   stats_.elapsedMs += ms;
   stats_.lastPassMs = ms;
   stats_.nanSamples = *static_cast<const uint32_t*>(counters_.mapped());
-  stats_.converged = stats_.spp >= maxSamples;
   sinceErrorMs_ += ms;
   if (refreshError)
     setRelError(r_->hostResolve() ? resolveOnHost(hostResolveInput(), nullptr, nullptr) : deviceErrorSums());
+  updateDone();
   return stats_;
 }
 

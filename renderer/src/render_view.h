@@ -52,6 +52,8 @@ class RenderViewImpl final : public RenderView {
   ErrorSums deviceErrorSums() const;  // from the resolve kernel's partial sums
   HostResolveInput hostResolveInput() const;
   void setRelError(const ErrorSums& sums);
+  // Sets stats_.converged and maxSamplesReached from spp, rel_error and the scene's limits.
+  void updateDone();
   // Entries of the error partial-sum buffer: one per subgroup of each resolve workgroup.
   size_t partialCount(uint32_t width, uint32_t height) const;
   ComputePush basePush() const;

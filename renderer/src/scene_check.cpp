@@ -19,12 +19,15 @@ const char* samplingModeName(SamplingMode mode) {
   switch (mode) {
     case SamplingMode::Uniform: return "uniform";
     case SamplingMode::Brdf: return "brdf";
+    case SamplingMode::Environment: return "environment";
+    case SamplingMode::Mis: return "mis";
     default: return "cosine";
   }
 }
 
 bool samplingModeFromName(const std::string& name, SamplingMode& mode) {
-  for (SamplingMode m : {SamplingMode::Cosine, SamplingMode::Uniform, SamplingMode::Brdf})
+  for (SamplingMode m : {SamplingMode::Cosine, SamplingMode::Uniform, SamplingMode::Brdf, SamplingMode::Environment,
+                         SamplingMode::Mis})
     if (name == samplingModeName(m)) {
       mode = m;
       return true;

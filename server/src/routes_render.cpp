@@ -177,7 +177,7 @@ void registerRenderRoutes(httplib::Server& server, Service& service) {
         return sendError(res, 500, "internal", "renderer did not converge after " + std::to_string(passes) + " passes");
       Result<FrameStats> pass = v.renderPass();
       if (!pass) return sendError(res, pass.error());
-      if (pass.value().converged) break;
+      if (pass.value().done()) break;
     }
     Result<Frame> frame = v.readFrame(frameFormatIsFloat(format));
     if (!frame) return sendError(res, frame.error());

@@ -163,7 +163,7 @@ Result<Session::EncodedFrame> Session::waitAndEncodeFrame(uint64_t minSpp, std::
     auto registered = waitTargets_.insert(target);
     ++waiters_;
     wake_.notify_all();
-    auto reached = [&] { return stopping_ || renderError_ || (hasScene_ && (stats_.spp >= target || stats_.converged)); };
+    auto reached = [&] { return stopping_ || renderError_ || (hasScene_ && (stats_.spp >= target || stats_.done())); };
     progress_.wait_for(lock, timeout, reached);
     --waiters_;
     waitTargets_.erase(registered);
@@ -250,7 +250,7 @@ void Session::publishFrame(std::unique_lock<std::mutex>& lock) {
   }
   Frame& f = frame.value();
   if (f.width <= 0 || f.height <= 0 || f.rgba8.size() < static_cast<size_t>(f.width) * f.height * 4) return;
-  pendingRaw_ = RawFrame{std::move(f.rgba8), f.width, f.height, f.stats.spp, f.stats.sceneVersion, f.stats.converged};
+  pendingRaw_ = RawFrame{std::move(f.rgba8), f.width, f.height, f.stats.spp, f.stats.sceneVersion, f.stats.done()};
   encodeWake_.notify_one();
 }
 
@@ -295,7 +295,7 @@ void Session::renderLoop() {
     bool canRender = hasScene_ && !renderError_;
     // A waiter whose samples are there reads next: no new pass may slip in before its read.
     bool waiterSatisfied = !waitTargets_.empty() && stats_.spp >= *waitTargets_.begin();
-    bool wantPass = canRender && !stats_.converged && watchedLocked(Clock::now()) && pendingViewCalls_ == 0 &&
+    bool wantPass = canRender && !stats_.done() && watchedLocked(Clock::now()) && pendingViewCalls_ == 0 &&
                     !waiterSatisfied;
     bool wantPublish = canRender && streamClients_ > 0 && publishRequested_ && stats_.spp > 0 && pendingViewCalls_ == 0;
     if (!wantPass && !wantPublish) {
@@ -322,7 +322,7 @@ void Session::renderLoop() {
       // A pass of a scene that was replaced meanwhile must not overwrite the new scene's stats.
       if (pass.value().sceneVersion >= stats_.sceneVersion) stats_ = pass.value();
       progress_.notify_all();
-      bool due = publishRequested_ || stats_.converged || Clock::now() - lastPublish_ >= kPublishInterval;
+      bool due = publishRequested_ || stats_.done() || Clock::now() - lastPublish_ >= kPublishInterval;
       if (streamClients_ > 0 && stats_.spp > 0 && due) publishFrame(lock);
     } else {
       publishFrame(lock);

@@ -79,7 +79,7 @@ class BuiltinLibrary : public ::testing::Test {
     for (int guard = 0; guard < 1000; ++guard) {
       auto pass = view.value()->renderPass();
       EXPECT_TRUE(pass.ok());
-      if (!pass.ok() || pass->converged) break;
+      if (!pass.ok() || pass->done()) break;
     }
     auto frame = view.value()->readFrame(true);
     EXPECT_TRUE(frame.ok());

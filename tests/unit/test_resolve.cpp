@@ -87,7 +87,7 @@ Frame renderWith(ResolveMode mode, ToneMap toneMap = ToneMap::Clamp, float expos
   s.objects.push_back(o);
   auto view = (*renderer)->createView();
   EXPECT_TRUE((*view)->setScene(s).ok());
-  while (!(*view)->renderPass()->converged) {
+  while (!(*view)->renderPass()->done()) {
   }
   return (*view)->readFrame(true).value();
 }

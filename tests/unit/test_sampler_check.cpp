@@ -212,7 +212,7 @@ TEST_F(Samplers, RenderingWithTheGgxSamplerIsUnbiasedAndLessNoisy) {
     s.objects.push_back(o);
     auto view = renderer_->createView().value();
     EXPECT_TRUE(view->setScene(s).ok());
-    while (!view->renderPass()->converged) {
+    while (!view->renderPass()->done()) {
     }
     return view->readFrame(true).value();
   };

@@ -52,11 +52,23 @@ struct FrameStats {
   double elapsedMs = 0;       // render time spent since the last scene change
   double lastPassMs = 0;      // wall time of the latest pass
   uint64_t nanSamples = 0;    // NaN/Inf samples dropped since the last scene change
-  std::optional<double> relError;  // relative RMS error from the two half accumulators
+  // Relative RMS error of the image, estimated from two statistically independent half
+  // accumulators: sqrt(mean over object pixels of the mean's variance) / mean luminance.
+  std::optional<double> relError;
+  uint64_t relErrorSpp = 0;        // spp when relError was last measured (refreshed every ~200 ms)
+  double relErrorElapsedMs = 0;    // elapsedMs at that moment
   uint64_t vertices = 0;
   uint64_t triangles = 0;
   uint64_t programBytes = 0;  // SPIR-V size of the scene's distinct shading programs
-  bool converged = false;     // spp reached render.max_samples
+  bool converged = false;          // rel_error <= render.target_error (never without a target)
+  bool maxSamplesReached = false;  // spp reached render.max_samples
+  bool done() const { return converged || maxSamplesReached; }  // no more passes will run
+  // The estimator the objects run, e.g. "mis(environment+brdf)", "mis(environment+cosine)",
+  // "brdf", "cosine", "legacy"; several distinct ones are joined with ", ".
+  std::string estimator;
+  // Why the estimator differs from the requested mode (a sampler without pdfBRDF cannot take
+  // part in MIS, a BRDF without a sampler falls back to cosine).
+  std::vector<std::string> warnings;
   uint64_t sceneVersion = 0;  // increments on every setScene that changed the scene
 };
 
@@ -79,13 +91,13 @@ class RenderView {
   // uploads what changed. Accumulation restarts when the image changes: camera, geometry,
   // environment, sampling, image size, a BRDF or a parameter value. Exposure,
   // samples_per_frame and max_samples keep it (lowering max_samples below the samples taken
-  // leaves spp above it, converged). A change of parameter values only never recompiles. An
+  // leaves spp above it, done; target_error likewise). A change of parameter values only never recompiles. An
   // identical scene changes nothing. On error the previous scene stays in place.
   virtual Result<void> setScene(const Scene& scene) = 0;
 
   // Renders one progressive pass of render.samples_per_frame samples per pixel: fewer in the
   // first passes after a restart (1, 2, 4, ...) and when max_samples is near. Does nothing once
-  // converged.
+  // done() (converged to render.target_error, or max_samples reached).
   virtual Result<FrameStats> renderPass() = 0;
 
   virtual FrameStats stats() const = 0;

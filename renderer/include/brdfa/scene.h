@@ -2,6 +2,7 @@
 // Names (mesh, environment) are resolved by the renderer; BRDFs arrive already parsed.
 #pragma once
 
+#include <cstdint>
 #include <map>
 #include <memory>
 #include <string>
@@ -28,8 +29,15 @@ struct EnvironmentSettings {
 // How the integrator draws directions. All are unbiased: f * L * cos / pdf.
 //   Cosine, Uniform: over the hemisphere. Brdf: the file's own sampleBRDF() (importance
 //   sampling); for a BRDF without a `::begin sample` section it falls back to Cosine.
-enum class SamplingMode { Cosine, Uniform, Brdf };
-const char* samplingModeName(SamplingMode mode);  // "cosine" | "uniform" | "brdf"
+//   Environment: directions drawn in proportion to the environment's luminance (over the whole
+//   sphere; a constant environment draws uniformly). Mis: multiple importance sampling of the
+//   environment and the BRDF side (the file's sampler when it also defines pdfBRDF, else
+//   cosine), Veach 1997's balance heuristic over a deterministic mixture; in a constant
+//   environment it is the BRDF side alone (the environment adds no shape to the integrand).
+// Legacy render() files always run the BRDFA Engine's estimator, whatever the mode.
+enum class SamplingMode { Cosine, Uniform, Brdf, Environment, Mis };
+// "cosine" | "uniform" | "brdf" | "environment" | "mis"
+const char* samplingModeName(SamplingMode mode);
 bool samplingModeFromName(const std::string& name, SamplingMode& mode);  // false if unknown
 
 // Display mapping of linear radiance L (after exposure, e = L * 2^exposure) before the sRGB
@@ -46,7 +54,9 @@ struct RenderSettings {
   int height = 512;
   int samplesPerFrame = 4;
   int maxSamples = 4096;
-  SamplingMode sampling = SamplingMode::Cosine;
+  SamplingMode sampling = SamplingMode::Mis;
+  // Rendering stops once rel_error <= targetError (FrameStats::converged); 0 means no target.
+  double targetError = 0;
   float exposure = 0.0f;  // stops; PNG = sRGB(tonemap(L * 2^exposure))
   ToneMap toneMap = ToneMap::Clamp;
 };
@@ -86,6 +96,8 @@ inline constexpr int kMaxImageSize = 4096;
 inline constexpr int kMaxSamplesPerFrame = 1024;
 inline constexpr int kMaxTotalSamples = 1 << 20;
 inline constexpr int kMaxObjects = 64;
+// render.target_error is judged only from this many samples per pixel on (see FrameStats::converged).
+inline constexpr uint64_t kMinSppForTarget = 16;
 inline constexpr float kMaxPitch = 89.0f;  // degrees; camera pitch is clamped to +-this
 
 }  // namespace brdfa
