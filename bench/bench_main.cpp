@@ -3,10 +3,12 @@
 //   brdfa-bench [--rounds N] [--source DIR]
 #include <cstdio>
 #include <cstdlib>
+#include <algorithm>
 #include <string>
 
 #include "bench_http.h"
 #include "bench_renderer.h"
+#include "bench_sampling.h"
 #include "bench_scenes.h"
 
 int main(int argc, char** argv) {
@@ -24,6 +26,8 @@ int main(int argc, char** argv) {
   int code = brdfa::bench::runRendererBench(source, rounds);
   if (code != 0) return code;
   code = brdfa::bench::runSceneBench(source, rounds);
+  if (code != 0) return code;
+  code = brdfa::bench::runSamplingBench(source, std::max(1, rounds / 5));
   if (code != 0) return code;
   return brdfa::bench::runHttpBench(BRDFA_SERVER_BINARY, source);
 }

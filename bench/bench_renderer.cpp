@@ -24,6 +24,7 @@ Scene ggxScene(const std::string& sourceDir, bool visibleBackground, int samples
   s.environment.visible = visibleBackground;
   s.render.samplesPerFrame = samplesPerPass;
   s.render.maxSamples = kMaxTotalSamples;
+  s.render.sampling = SamplingMode::Cosine;  // the reference kernel's estimator
   SceneObject o;
   o.brdf = std::make_shared<BrdfDefinition>(def.value());
   s.objects.push_back(o);

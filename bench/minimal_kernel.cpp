@@ -94,7 +94,8 @@ Result<std::unique_ptr<MinimalKernel>> MinimalKernel::create(const std::string& 
   auto cube = Image::create(c, spec);
   if (!cube) return cube.takeError();
   st->cube = std::move(cube.value());
-  BRDFA_TRY(uploadImage(c, st->cube, env->texels.data(), env->texels.size() * 2));
+  const HalfCube half = packHalfCube(*env);  // the sky fits the half range: scale 1
+  BRDFA_TRY(uploadImage(c, st->cube, half.texels.data(), half.texels.size() * sizeof(uint16_t)));
   auto accum = Buffer::create(c, VkDeviceSize(width) * height * 16,
                               VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT, false);
   if (!accum) return accum.takeError();

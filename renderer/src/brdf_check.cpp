@@ -81,7 +81,7 @@ Result<void> RendererImpl::runCheckKernel(const BrdfDefinition& brdf, const char
   // Set 0 carries the output in the accumulator binding (3); set 1 the parameter block.
   PoolOwner res;
   res.device = ctx.device();
-  VkDescriptorPoolSize sizes[3] = {{VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 6},
+  VkDescriptorPoolSize sizes[3] = {{VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 7},
                                    {VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, 5},
                                    {VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, 2}};
   VkDescriptorPoolCreateInfo pci{VK_STRUCTURE_TYPE_DESCRIPTOR_POOL_CREATE_INFO};
@@ -104,7 +104,7 @@ Result<void> RendererImpl::runCheckKernel(const BrdfDefinition& brdf, const char
   VkDescriptorBufferInfo paramInfo{params->handle(), 0, VK_WHOLE_SIZE};
   VkDescriptorImageInfo envInfo{envSampler_, (*furnace)->cube.view(), VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL};
   std::vector<VkWriteDescriptorSet> writes;
-  for (uint32_t binding : {0u, 3u, 4u, 6u, 7u, 8u})
+  for (uint32_t binding : {0u, 3u, 4u, 6u, 7u, 8u, 9u})
     writes.push_back({VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET, nullptr, sets[0], binding, 0, 1,
                       VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, nullptr, &outInfo, nullptr});
   writes.push_back({VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET, nullptr, sets[0], 5, 0, 1,

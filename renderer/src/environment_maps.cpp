@@ -76,13 +76,29 @@ void cubeFaceCoords(const float dir[3], int& face, float& s, float& t) {
   t = tc / ma;
 }
 
+HalfCube packHalfCube(const EnvironmentData& env) {
+  constexpr float kHalfMax = 65504.0f;
+  float brightest = 0.0f;
+  for (size_t i = 0; i < env.texels.size(); i += 4)
+    for (int c = 0; c < 3; ++c) brightest = std::max(brightest, env.texels[i + c]);
+  HalfCube cube;
+  // A power of two: dividing by it is exact, so texels within range pack exactly as before.
+  while (brightest / cube.scale > kHalfMax) cube.scale *= 2.0f;
+  cube.texels.resize(env.texels.size());
+  for (size_t i = 0; i < env.texels.size(); i += 4) {
+    for (int c = 0; c < 3; ++c) cube.texels[i + c] = glm::packHalf1x16(env.texels[i + c] / cube.scale);
+    cube.texels[i + 3] = glm::packHalf1x16(1.0f);
+  }
+  return cube;
+}
+
 EnvironmentData makeFilteredCube(const std::string& name, uint32_t size, const DirectionLookup& lookup,
                                  const StrataPerAxis& strata) {
   EnvironmentData env;
   env.name = name;
   env.faceSize = size;
   env.texels.resize(size_t(6) * size * size * 4);
-  uint16_t* out = env.texels.data();
+  float* out = env.texels.data();
   for (int face = 0; face < 6; ++face)
     for (uint32_t y = 0; y < size; ++y)
       for (uint32_t x = 0; x < size; ++x, out += 4) {
@@ -95,8 +111,8 @@ EnvironmentData makeFilteredCube(const std::string& name, uint32_t size, const D
             lookup(d, rgb);
             for (int c = 0; c < 3; ++c) sum[c] += rgb[c];
           }
-        for (int c = 0; c < 3; ++c) out[c] = glm::packHalf1x16(static_cast<float>(sum[c] / (n * n)));
-        out[3] = glm::packHalf1x16(1.0f);
+        for (int c = 0; c < 3; ++c) out[c] = static_cast<float>(sum[c] / (n * n));
+        out[3] = 1.0f;
       }
   return env;
 }

@@ -14,8 +14,18 @@ struct EnvironmentData {
   std::string name;
   bool constant = false;     // radiance 1 in every direction (the furnace): kernels skip lookups
   uint32_t faceSize = 1;
-  std::vector<uint16_t> texels;  // RGBA half floats, faces +X -X +Y -Y +Z -Z, rows top to bottom
+  std::vector<float> texels;  // linear RGBA, faces +X -X +Y -Y +Z -Z, rows top to bottom; never clipped
 };
+
+// The cube as uploaded: RGBA16F (the format whose linear filtering Vulkan guarantees) holding
+// texels / scale, with `scale` a power of two >= 1 chosen so the brightest texel fits the half
+// range (65504). The kernels multiply by `scale` with the environment's intensity, so no
+// radiance is clipped: a sun of 1e6 keeps its energy, at half precision (11 significant bits).
+struct HalfCube {
+  std::vector<uint16_t> texels;
+  float scale = 1.0f;
+};
+HalfCube packHalfCube(const EnvironmentData& env);
 
 // "furnace" (radiance 1 everywhere), "sky" (daylight with a sun), "studio" (three rectangular
 // area lights over a dim grey surround), "cornell" (inside a Cornell-box-like room).

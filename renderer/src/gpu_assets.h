@@ -25,7 +25,11 @@ struct GpuMesh {
 struct GpuEnvironment {
   std::string name;
   bool constant = false;
+  float scale = 1.0f;  // radiance = texel * scale (packHalfCube); folded into the intensity push constant
   Image cube;  // RGBA16F, SHADER_READ_ONLY_OPTIMAL
+  // Importance-sampling table (environment_sampling.h), a storage buffer at set 0 binding 9; a
+  // constant environment has only the header (D = 0: kernels sample it uniformly).
+  Buffer table;
 };
 
 // A texture an object samples as iTexture0..3: RGBA8, sRGB-decoding or linear.

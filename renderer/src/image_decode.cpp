@@ -122,11 +122,9 @@ Result<FloatImage> decodeHdr(std::string_view bytes, const ImageSizeCheck& check
 // Makes decoded radiance fit the internal cube. Non-finite values are refused: one NaN or
 // infinity would spread through every estimate that samples it, and the file is broken.
 // Negative values (ringing of some resampling filters, or plain errors) are not radiance and
-// become 0. Values above 65504, the largest half float, become 65504: the cube is RGBA16F, where
-// they would turn into +infinity (and infinity times a zero pdf into NaN); a sun brighter than
-// that is rare in captured maps and still the brightest texel after clamping.
+// become 0. Radiance above the half-float range is kept: the cube is uploaded with a scale
+// (packHalfCube), so a bright sun keeps its energy.
 Result<void> sanitizeRadiance(FloatImage& image, AssetFormat format) {
-  const float kHalfMax = 65504.0f;
   for (size_t i = 0; i < image.rgb.size(); ++i) {
     float& v = image.rgb[i];
     if (!std::isfinite(v)) {
@@ -136,7 +134,7 @@ Result<void> sanitizeRadiance(FloatImage& image, AssetFormat format) {
                            "infinity) at pixel (" + std::to_string(pixel % image.width) + ", " +
                            std::to_string(pixel / image.width) + "); radiance must be finite");
     }
-    v = v < 0.0f ? 0.0f : (v > kHalfMax ? kHalfMax : v);
+    v = v < 0.0f ? 0.0f : v;
   }
   return {};
 }

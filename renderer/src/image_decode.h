@@ -32,7 +32,7 @@ Result<TextureData> decodeTexture(std::string_view bytes, const AssetLimits& lim
 // Checks the pixel limit and the aspect from the header before decoding. Sets *layout to
 // "equirect" or "cross" when not null. InvalidArgument with a reason otherwise (wrong aspect,
 // truncated or damaged file, NaN or infinite radiance, limits). Negative radiance is clamped
-// to 0 and radiance above 65504 (the half-float maximum) to 65504.
+// to 0; radiance above the half-float range is kept (packHalfCube scales the upload).
 Result<EnvironmentData> decodeEnvironment(std::string_view bytes, const AssetLimits& limits, const std::string& name,
                                           std::string* layout);
 

@@ -65,7 +65,7 @@ Result<void> RenderViewImpl::init() {
   cmd_ = std::move(cmd.value());
 
   // New objects are built before the old ones are released, hence room for two scenes' worth.
-  VkDescriptorPoolSize sizes[3] = {{VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 6 * kMaxJitter},
+  VkDescriptorPoolSize sizes[3] = {{VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 7 * kMaxJitter},
                                    {VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, kMaxJitter + 8 * kMaxObjects},
                                    {VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, 4 * kMaxObjects}};
   VkDescriptorPoolCreateInfo pci{VK_STRUCTURE_TYPE_DESCRIPTOR_POOL_CREATE_INFO};
@@ -159,19 +159,20 @@ Result<void> RenderViewImpl::resize(uint32_t width, uint32_t height) {
 
 void RenderViewImpl::writeViewDescriptors() {
   VkDescriptorImageInfo env{r_->environmentSampler(), env_->cube.view(), VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL};
-  const std::pair<uint32_t, const Buffer*> buffers[6] = {{0, &gbuffer_},  {3, &accum_},    {4, &counters_},
-                                                         {6, &outRgba8_}, {7, &outFloat_}, {8, &partials_}};
+  const std::pair<uint32_t, const Buffer*> buffers[7] = {{0, &gbuffer_},  {3, &accum_},    {4, &counters_},
+                                                         {6, &outRgba8_}, {7, &outFloat_}, {8, &partials_},
+                                                         {9, &env_->table}};
   const VkDeviceSize sliceBytes = VkDeviceSize(width_) * height_ * 3 * 16;
   // Every set is written (unused slices alias slice 0) so that no set is ever left invalid.
   for (uint32_t slice = 0; slice < kMaxJitter; ++slice) {
-    VkDescriptorBufferInfo infos[6];
-    VkWriteDescriptorSet w[7] = {};
-    for (uint32_t i = 0; i < 7; ++i) {
+    VkDescriptorBufferInfo infos[7];
+    VkWriteDescriptorSet w[8] = {};
+    for (uint32_t i = 0; i < 8; ++i) {
       w[i].sType = VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET;
       w[i].dstSet = viewSets_[slice];
       w[i].descriptorCount = 1;
     }
-    for (uint32_t i = 0; i < 6; ++i) {
+    for (uint32_t i = 0; i < 7; ++i) {
       infos[i] = {buffers[i].second->handle(), 0, VK_WHOLE_SIZE};
       w[i].dstBinding = buffers[i].first;
       w[i].descriptorType = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER;
@@ -179,10 +180,10 @@ void RenderViewImpl::writeViewDescriptors() {
     }
     infos[0].offset = (slice < jitterCount_ ? slice : 0) * sliceStride_;
     infos[0].range = sliceBytes;
-    w[6].dstBinding = 5;
-    w[6].descriptorType = VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER;
-    w[6].pImageInfo = &env;
-    vkUpdateDescriptorSets(r_->ctx().device(), 7, w, 0, nullptr);
+    w[7].dstBinding = 5;
+    w[7].descriptorType = VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER;
+    w[7].pImageInfo = &env;
+    vkUpdateDescriptorSets(r_->ctx().device(), 8, w, 0, nullptr);
   }
 }
 
@@ -339,6 +340,18 @@ Result<void> RenderViewImpl::setScene(const Scene& scene) {
   }
   if (restart || displayChanged) ++stats_.sceneVersion;
   stats_.vertices = stats_.triangles = stats_.programBytes = 0;
+  stats_.estimator.clear();
+  stats_.warnings.clear();
+  for (const SceneObject& so : scene_.objects) {
+    ShadeVariant v = shadeVariant(*so.brdf, scene_.render.sampling, env_ && env_->constant);
+    if (stats_.estimator.find(v.estimator) == std::string::npos)
+      stats_.estimator += (stats_.estimator.empty() ? "" : ", ") + v.estimator;
+    for (std::string& w : v.warnings) {
+      std::string named = so.brdfName.empty() ? w : so.brdfName + ": " + w;
+      if (std::find(stats_.warnings.begin(), stats_.warnings.end(), named) == stats_.warnings.end())
+        stats_.warnings.push_back(std::move(named));
+    }
+  }
   std::vector<uint64_t> programs;
   for (const ObjectState& o : objects_) {
     stats_.vertices += o.mesh->vertexCount;
@@ -368,7 +381,7 @@ ComputePush RenderViewImpl::basePush() const {
   put(p.cameraUp, cam.up * cam.tanHalfFov);
   put(p.cameraForward, cam.forward);
   float rot = glm::radians(scene_.environment.rotation);
-  p.env[0] = scene_.environment.intensity;
+  p.env[0] = scene_.environment.intensity * (env_ ? env_->scale : 1.0f);
   p.env[1] = std::cos(rot);
   p.env[2] = std::sin(rot);
   p.frame[0] = width_;
@@ -379,10 +392,9 @@ ComputePush RenderViewImpl::basePush() const {
 }
 
 uint32_t RenderViewImpl::sliceForPass(uint64_t pass) const {
-  // Passes alternate between the half accumulators (pass & 1); each half must see every slice
-  // equally often, or the halves would differ at edges by more than noise and rel_error would
-  // never fall. Even passes take slices 0, 1, 2, 3, odd ones 2, 3, 0, 1: the first four passes
-  // touch all four slices, and every eight passes give each half each slice once.
+  // Every pass shares its samples between the half accumulators, so both halves see each slice
+  // equally often (to within a sample). Even passes take slices 0, 1, 2, 3, odd ones 2, 3, 0, 1:
+  // the first four passes touch all four slices, and every eight passes take each twice.
   const uint64_t j = jitterCount_;
   return static_cast<uint32_t>(((pass >> 1) + (pass & 1) * (j / 2)) % j);
 }
@@ -430,7 +442,7 @@ void RenderViewImpl::recordRaster(VkCommandBuffer cb, uint32_t slice) {
 }
 
 void RenderViewImpl::recordBackground(VkCommandBuffer cb, const PixelRect& rect, uint32_t slice, uint32_t count,
-                                      uint32_t half, bool firstPass) {
+                                      bool firstPass) {
   if (rect.width == 0 || rect.height == 0) return;
   ComputePush push = basePush();
   const bool visible = scene_.environment.visible;
@@ -440,8 +452,8 @@ void RenderViewImpl::recordBackground(VkCommandBuffer cb, const PixelRect& rect,
   const glm::vec2 jitter = count == 0 ? glm::vec2(0.0f) : jitterOffset(slice, jitterCount_);
   push.tone[2] = jitter.x;
   push.tone[3] = jitter.y;
+  push.frame[2] = static_cast<uint32_t>(stats_.spp);  // index of the pass's first sample
   push.frame[3] = count;  // 0: the once-per-restart write
-  push.target[1] = half;
   push.target[2] = rect.x | (rect.y << 16);
   push.target[3] = firstPass ? 1u : 0u;
   vkCmdBindPipeline(cb, VK_PIPELINE_BIND_POINT_COMPUTE, r_->backgroundPipeline(env_->constant || !visible));
@@ -463,7 +475,7 @@ void RenderViewImpl::recordPending(VkCommandBuffer cb, uint32_t slice) {
                   VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_ACCESS_SHADER_READ_BIT | VK_ACCESS_SHADER_WRITE_BIT);
   if (clearPending_ && scene_.environment.visible) {
     // Deterministic outside the objects' bounds: written once per restart, not every pass.
-    recordBackground(cb, PixelRect{0, 0, width_, height_}, 0, 0, 0, false);
+    recordBackground(cb, PixelRect{0, 0, width_, height_}, 0, 0, false);
     memoryBarrier(cb, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_ACCESS_SHADER_WRITE_BIT,
                   VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_ACCESS_SHADER_READ_BIT | VK_ACCESS_SHADER_WRITE_BIT);
   }
@@ -532,7 +544,6 @@ Result<FrameStats> RenderViewImpl::renderPass() {
   ComputePush push = basePush();
   push.frame[2] = static_cast<uint32_t>(stats_.spp);  // the sequence continues across passes
   push.frame[3] = count;
-  push.target[1] = static_cast<uint32_t>(stats_.passes & 1u);  // alternate half accumulators
   push.target[3] = stats_.passes == 0 ? 1u : 0u;                // first pass: overwrite, not add
   const VkPipelineLayout layout = r_->computeLayout();
   vkCmdBindDescriptorSets(cb, VK_PIPELINE_BIND_POINT_COMPUTE, layout, 0, 1, &viewSets_[slice], 0, nullptr);
@@ -553,7 +564,7 @@ Result<FrameStats> RenderViewImpl::renderPass() {
   // (an edge): its background samples are taken with the pass, so the pixel is the average over
   // its sub-pixel positions. With one slice nothing changes from pass to pass there.
   if (jitterCount_ > 1)
-    recordBackground(cb, coverRect_, slice, count, push.target[1], stats_.passes == 0);
+    recordBackground(cb, coverRect_, slice, count, stats_.passes == 0);
   // Refresh the error estimate in the same submission when it is due (and a second half exists).
   const bool refreshError = stats_.passes >= 1 &&
                             (sinceErrorMs_ >= kErrorRefreshMs || stats_.spp + count >= maxSamples);

@@ -46,8 +46,7 @@ class RenderViewImpl final : public RenderView {
   void recordRaster(VkCommandBuffer cb, uint32_t slice);
   // The background where no object can be (outside every object's screen bounds) is written
   // once per restart; inside those bounds it is sampled each pass with that pass's jitter.
-  void recordBackground(VkCommandBuffer cb, const PixelRect& rect, uint32_t slice, uint32_t count, uint32_t half,
-                        bool firstPass);
+  void recordBackground(VkCommandBuffer cb, const PixelRect& rect, uint32_t slice, uint32_t count, bool firstPass);
   void recordResolve(VkCommandBuffer cb, bool linear);
   ErrorSums deviceErrorSums() const;  // from the resolve kernel's partial sums
   HostResolveInput hostResolveInput() const;

@@ -11,6 +11,7 @@
 
 #include "brdf_features.h"
 #include "environment_maps.h"
+#include "environment_sampling.h"
 #include "meshes.h"
 #include "obj_loader.h"
 #include "render_view.h"
@@ -138,12 +139,12 @@ Result<void> RendererImpl::createLayouts() {
   VkDevice d = ctx_->device();
   // Set 0: one view's G-buffer, accumulators, counters, environment and outputs
   // (bindings as in shaders/lib/bindings.glsl).
-  const std::array<std::pair<uint32_t, VkDescriptorType>, 7> viewBindings = {{
+  const std::array<std::pair<uint32_t, VkDescriptorType>, 8> viewBindings = {{
       {0, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER},  {3, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER},
       {4, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER},  {5, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER},
       {6, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER},  {7, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER},
-      {8, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER}}};
-  std::array<VkDescriptorSetLayoutBinding, 7> view{};
+      {8, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER},  {9, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER}}};
+  std::array<VkDescriptorSetLayoutBinding, 8> view{};
   for (size_t i = 0; i < view.size(); ++i)
     view[i] = {viewBindings[i].first, viewBindings[i].second, 1, VK_SHADER_STAGE_COMPUTE_BIT, nullptr};
   VkDescriptorSetLayoutCreateInfo li{VK_STRUCTURE_TYPE_DESCRIPTOR_SET_LAYOUT_CREATE_INFO};
@@ -364,28 +365,72 @@ Result<std::shared_ptr<const SpirvBinary>> RendererImpl::spirv(ShaderStage stage
   return shared;
 }
 
+ShadeVariant shadeVariant(const BrdfDefinition& brdf, SamplingMode sampling, bool constantEnv) {
+  ShadeVariant v;
+  if (brdf.format == BrdfFormat::Legacy) {
+    // A legacy render() file always runs the engine's uniform average (kernels/shade.comp.glsl).
+    v.define = "BRDFA_LEGACY_RENDER";
+    v.estimator = "legacy";
+    if (sampling != SamplingMode::Uniform)
+      v.warnings.push_back("a legacy render() file runs the BRDFA Engine's estimator, whatever the sampling mode");
+    return v;
+  }
+  const bool sampler = brdf.hasSampler();
+  const bool pdf = sampler && detectFeatures(brdf).samplerPdf;
+  // The BRDF side on its own: the file's sampler, else cosine.
+  auto brdfSide = [&](bool forMis) {
+    if (sampler) {
+      v.define = "BRDFA_SAMPLING_BRDF";
+      v.useSampler = true;
+      v.estimator = "brdf";
+    } else {
+      v.define = "BRDFA_SAMPLING_COSINE";
+      v.estimator = "cosine";
+      if (!forMis) v.warnings.push_back("the BRDF has no ::begin sample section: brdf sampling falls back to cosine");
+    }
+  };
+  switch (sampling) {
+    case SamplingMode::Cosine: v.define = "BRDFA_SAMPLING_COSINE"; v.estimator = "cosine"; break;
+    case SamplingMode::Uniform: v.define = "BRDFA_SAMPLING_UNIFORM"; v.estimator = "uniform"; break;
+    case SamplingMode::Brdf: brdfSide(false); break;
+    case SamplingMode::Environment: v.define = "BRDFA_SAMPLING_ENVIRONMENT"; v.estimator = "environment"; break;
+    case SamplingMode::Mis:
+      if (constantEnv) {
+        // A constant environment adds no shape to the integrand: the BRDF side alone is the
+        // better estimator (and exact for a Lambertian with cosine sampling).
+        brdfSide(true);
+        break;
+      }
+      v.define = "BRDFA_SAMPLING_MIS";
+      v.useSampler = pdf;
+      v.misFileSampler = pdf;
+      v.estimator = pdf ? "mis(environment+brdf)" : "mis(environment+cosine)";
+      if (sampler && !pdf)
+        v.warnings.push_back("sampleBRDF without pdfBRDF cannot take part in MIS: mis combines the environment "
+                             "with cosine sampling");
+      break;
+  }
+  return v;
+}
+
 AssembledProgram RendererImpl::assembleShadeProgram(const BrdfDefinition& brdf, SamplingMode sampling,
                                                     bool constantEnv) const {
+  const ShadeVariant variant = shadeVariant(brdf, sampling, constantEnv);
   // The file's sampler is compiled in only where it is used: its code would otherwise count
   // towards the features the program needs (brdf_features.cpp).
-  // A legacy render() file always runs the engine's uniform average (kernels/shade.comp.glsl).
-  const bool legacy = brdf.format == BrdfFormat::Legacy;
-  const bool useSampler = !legacy && sampling == SamplingMode::Brdf && brdf.hasSampler();
   BrdfDefinition used = brdf;
-  if (!useSampler) used.sampleShader.clear();
+  if (!variant.useSampler) used.sampleShader.clear();
   ProgramSpec spec;
   spec.brdf = &used;
-  spec.defines = {legacy       ? "BRDFA_LEGACY_RENDER"
-                  : useSampler ? "BRDFA_SAMPLING_BRDF"
-                  : sampling == SamplingMode::Uniform ? "BRDFA_SAMPLING_UNIFORM" : "BRDFA_SAMPLING_COSINE",
-                  constantEnv ? "BRDFA_ENV_CONSTANT" : "BRDFA_ENV_CUBEMAP"};
+  spec.defines = {variant.define, constantEnv ? "BRDFA_ENV_CONSTANT" : "BRDFA_ENV_CUBEMAP"};
+  if (variant.misFileSampler) spec.defines.push_back("BRDFA_MIS_FILE_SAMPLER");
   const BrdfFeatures features = detectFeatures(used);
   if (features.tangentFrame) spec.defines.push_back("BRDFA_TANGENT_FRAME");
   if (features.textures) spec.defines.push_back("BRDFA_TEXTURES");
   for (const char* piece : {"lib/bindings.glsl", "lib/random.glsl", "lib/frame.glsl", "lib/sampling.glsl",
-                            "lib/environment.glsl", "lib/brdf_inputs.glsl"})
+                            "lib/environment.glsl", "lib/environment_sampling.glsl", "lib/brdf_inputs.glsl"})
     spec.commonChunks.push_back(sources_.get(piece));
-  if (legacy) spec.commonChunks.push_back(sources_.get("lib/legacy_inputs.glsl"));
+  if (brdf.format == BrdfFormat::Legacy) spec.commonChunks.push_back(sources_.get("lib/legacy_inputs.glsl"));
   spec.integrator = sources_.get("kernels/shade.comp.glsl");
   return assembleProgram(spec);
 }
@@ -397,6 +442,15 @@ Result<CompileInfo> RendererImpl::compileBrdf(const BrdfDefinition& brdf) {
   auto code = spirv(ShaderStage::Compute, program.source, &info.cached);
   if (!code) return code.takeError();
   info.warnings = brdf.warnings;
+  if (brdf.hasSampler() && !detectFeatures(brdf).samplerPdf) {
+    Diagnostic d;
+    d.severity = "warning";
+    d.line = brdf.sampleFirstLine;
+    d.message = "the sample section defines no pdfBRDF(L, V, N, X, Y): sampleBRDF cannot take part in multiple "
+                "importance sampling (\"mis\" combines the environment with cosine sampling instead), and the "
+                "sampler check cannot run its chi-square test";
+    info.warnings.push_back(d);
+  }
   info.warnings.insert(info.warnings.end(), (*code)->warnings.begin(), (*code)->warnings.end());
   info.compileMs = info.cached ? 0.0 : (*code)->compileMs;
   return info;
@@ -409,7 +463,8 @@ Result<std::shared_ptr<const ShadeKernel>> RendererImpl::shadeKernel(const BrdfD
 
 Result<int> RendererImpl::preloadFromCache(const BrdfDefinition& brdf) {
   int built = 0;
-  for (SamplingMode sampling : {SamplingMode::Cosine, SamplingMode::Uniform, SamplingMode::Brdf}) {
+  for (SamplingMode sampling : {SamplingMode::Mis, SamplingMode::Cosine, SamplingMode::Uniform, SamplingMode::Brdf,
+                                SamplingMode::Environment}) {
     if (sampling == SamplingMode::Brdf && !brdf.hasSampler()) continue;  // same program as cosine
     for (bool constantEnv : {false, true}) {
       bool created = false;
@@ -573,11 +628,18 @@ Result<std::shared_ptr<GpuEnvironment>> RendererImpl::uploadEnvironment(const st
   spec.usage = VK_IMAGE_USAGE_SAMPLED_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT;
   auto image = Image::create(*ctx_, spec);
   if (!image) return image.takeError();
-  BRDFA_TRY(uploadImage(*ctx_, *image, data.texels.data(), data.texels.size() * sizeof(uint16_t)));
+  const HalfCube half = packHalfCube(data);
+  BRDFA_TRY(uploadImage(*ctx_, *image, half.texels.data(), half.texels.size() * sizeof(uint16_t)));
+  std::vector<float> table = {0.0f, float(1.0 / (4.0 * M_PI)), 0.0f, 0.0f};
+  if (!data.constant) table = buildEnvironmentDistribution(data).table;
+  auto tableBuffer = deviceBufferWith(*ctx_, table.data(), table.size() * sizeof(float), VK_BUFFER_USAGE_STORAGE_BUFFER_BIT);
+  if (!tableBuffer) return tableBuffer.takeError();
   auto env = std::make_shared<GpuEnvironment>();
   env->name = name;
   env->constant = data.constant;
+  env->scale = half.scale;
   env->cube = std::move(image.value());
+  env->table = std::move(tableBuffer.value());
   return env;
 }
 

@@ -22,6 +22,16 @@
 
 namespace brdfa {
 
+// What the shade kernel runs for a BRDF, a sampling mode and an environment kind.
+struct ShadeVariant {
+  const char* define = "BRDFA_SAMPLING_COSINE";  // the integrator's strategy (kernels/shade.comp.glsl)
+  bool useSampler = false;      // the file's sample section is compiled in
+  bool misFileSampler = false;  // mis draws its BRDF side from sampleBRDF/pdfBRDF
+  std::string estimator;        // FrameStats::estimator
+  std::vector<std::string> warnings;
+};
+ShadeVariant shadeVariant(const BrdfDefinition& brdf, SamplingMode sampling, bool constantEnv);
+
 class RendererImpl final : public Renderer, public std::enable_shared_from_this<RendererImpl> {
  public:
   static Result<std::shared_ptr<RendererImpl>> create(const RendererOptions& options);

@@ -1,8 +1,23 @@
 // The integrator: Monte Carlo estimate of reflected radiance for one object's pixels,
-//   L_o(V) = 1/N * sum_k f(L_k, V) * L_env(L_k) * max(0, N.L_k) / pdf(L_k),
-// with L_k from the sampler of this program (cosine-weighted, uniform, or the BRDF file's own
-// sampleBRDF(); all unbiased). Samples that are NaN or Inf are dropped and counted, never accumulated, and the
-// pixel's mean divides by the samples kept.
+//   L_o(V) = 1/N * sum_k f(L_k, V) * L_env(L_k) * max(0, N.L_k) / q(L_k),
+// with L_k drawn from the density q of this program's strategy; every strategy is unbiased:
+//  - cosine, uniform: over the hemisphere, cos/q in closed form (pi and 2 pi cos);
+//  - brdf: the file's own sampleBRDF(), which returns f and q;
+//  - environment: lib/environment_sampling.glsl, q in proportion to the map's luminance;
+//  - mis: multiple importance sampling of the environment and the BRDF side (the file's
+//    sampler when it also has pdfBRDF, else cosine) with the balance heuristic (Veach 1997,
+//    section 9.2), over a deterministic mixture: a fraction c of a pixel's samples come from the
+//    environment, the rest from the BRDF side, and every sample is weighted by the mixture
+//    density q = (1 - c) p_brdf + c p_env. Which strategy sample j uses follows the Kronecker
+//    sequence frac(j c + phi) < c with a random phi per pixel and half: each sample is drawn
+//    from the mixture exactly (so the estimate is unbiased for every j and every pass split),
+//    yet the counts per strategy are c N to within one, without the noise of a coin flip.
+//    c is chosen per pixel from how concentrated each side is (misEnvironmentFraction);
+//    it only changes the variance.
+// Samples that are NaN or Inf are dropped and counted, never accumulated, and the pixel's mean
+// divides by the samples kept. Sample i of a pixel goes to half accumulator i & 1 (see
+// lib/random.glsl): the halves are independent estimates, and the resolve measures the error
+// from their difference.
 //
 // A BRDFA Engine file (BRDFA_LEGACY_RENDER) is run as that engine ran it instead: the pixel is
 // the plain average of its render(L, N, V, texCoord, worldToLocal) over uniform hemisphere
@@ -11,6 +26,35 @@
 // the engine's images, and such files are marked "legacy" and never analysed.
 
 layout(local_size_x = 8, local_size_y = 8, local_size_z = 1) in;
+
+#if defined(BRDFA_SAMPLING_MIS)
+// Density of the BRDF side's draws at L.
+float brdfa_brdfSidePdf(vec3 L, vec3 V, vec3 N, vec3 X, vec3 Y) {
+#if defined(BRDFA_MIS_FILE_SAMPLER)
+  return pdfBRDF(L, V, N, X, Y);
+#else
+  return max(dot(N, L), 0.0) / BRDFA_PI;
+#endif
+}
+
+// The fraction c of this pixel's samples drawn from the environment. Each side's concentration
+// is a density: the BRDF side's at the mirror direction R (its lobe's peak for glossy files,
+// cos/pi for diffuse ones), the environment's either over the whole map (its effective density,
+// what matters to a wide lobe) or at R (what a narrow lobe sees), blended by how narrow the lobe
+// is. The more concentrated side gets more samples, within [0.1, 0.9] so neither side is ever
+// starved: the bound caps the variance cost of a wrong guess at 1/0.9 for the side that
+// should have had all samples, or 10x for the other.
+float brdfa_misEnvironmentFraction(vec3 V, vec3 N, vec3 X, vec3 Y) {
+  vec3 R = reflect(-V, N);
+  float lobe = brdfa_brdfSidePdf(R, V, N, X, Y);
+  // guard: a user's pdfBRDF may return NaN, Inf or a negative value here; the fraction must
+  // stay a number (NaN fails every comparison, so it takes the diffuse value).
+  lobe = lobe >= 0.0 ? min(lobe, 1e30) : 1.0 / BRDFA_PI;
+  float narrow = lobe / (lobe + 1.0);
+  float env = mix(brdfa_environmentConcentration(), brdfa_environmentPdf(R), narrow);
+  return clamp(env / (env + lobe), 0.1, 0.9);
+}
+#endif
 
 void main() {
   // The dispatch covers the object's screen bounds, starting at the packed origin.
@@ -41,15 +85,28 @@ void main() {
   brdfa_basisFromNormal(N, X, Y);
 #endif
 
-  uvec2 rotation = brdfa_pixelRotation(p);
+  uvec4 rotation[2] = uvec4[2](brdfa_halfRotation(p, 0u), brdfa_halfRotation(p, 1u));
+#if defined(BRDFA_SAMPLING_MIS)
+  // c in 0.24 fixed point, so the strategy test below and the weight use exactly the same c.
+  uint envShare = uint(brdfa_misEnvironmentFraction(V, N, X, Y) * 16777216.0) << 8u;
+  float cEnv = float(envShare >> 8u) * (1.0 / 16777216.0);
+  float cBrdf = 1.0 - cEnv;
+  uvec2 phase = uvec2(rotation[0].x ^ 0xa511e9b3u, rotation[1].x ^ 0x63d83595u);
+  phase = uvec2(brdfa_hash(phase.x), brdfa_hash(phase.y));
+#endif
   uint first = brdfa_pc.frame.z;
   uint count = brdfa_pc.frame.w;
-  vec3 sum = vec3(0.0);
+  vec3 sums[2] = vec3[2](vec3(0.0), vec3(0.0));
+  uint kept[2] = uint[2](0u, 0u);
   uint dropped = 0u;
   for (uint s = 0u; s < count; ++s) {
+    uint i = first + s;
+    uint h = i & 1u;
+    uint j = i >> 1u;
+    uvec4 u = brdfa_sample4D(rotation[h], j);
 #if defined(BRDFA_LEGACY_RENDER)
     float unusedWeight;
-    vec3 l = brdfa_sampleUniformHemisphere(brdfa_sample2D(rotation, first + s), unusedWeight);
+    vec3 l = brdfa_sampleUniformHemisphere(brdfa_unorm2(u.xy), unusedWeight);
     vec3 L = X * l.x + Y * l.y + N * l.z;
     // Rows X, Y, N: world (environment frame) -> local tangent space.
     vec3 c = render(L, N, V, texCoord, transpose(mat3(X, Y, N)));
@@ -57,13 +114,50 @@ void main() {
     // The file's own importance sampler: it returns f(L, V) and the solid-angle pdf of L.
     vec3 L;
     float pdf;
-    vec3 f = sampleBRDF(brdfa_sample2D(rotation, first + s), V, N, X, Y, L, pdf);
+    vec3 f = sampleBRDF(brdfa_unorm2(u.xy), V, N, X, Y, L, pdf);
     // guard: pdf = 0 marks a direction the sampler rejected (below the horizon): it
     // contributes 0, and dividing would give 0/0.
     vec3 c = pdf > 0.0 ? f * brdfa_environmentUnit(L) * (max(dot(N, L), 0.0) / pdf) : vec3(0.0);
+#elif defined(BRDFA_SAMPLING_ENVIRONMENT)
+    float pdf;
+    vec3 L = brdfa_sampleEnvironment(u, pdf);
+    float NoL = dot(N, L);
+    // Directions below the horizon are drawn too (the map is sampled over the whole sphere)
+    // and contribute 0; the BRDF is not evaluated there.
+    vec3 c = NoL > 0.0 ? BRDF(L, V, N, X, Y) * brdfa_environmentUnit(L) * (NoL / pdf) : vec3(0.0);
+#elif defined(BRDFA_SAMPLING_MIS)
+    vec3 L;
+    vec3 f = vec3(0.0);
+    float pdfEnv = 0.0, pdfBrdf = 0.0;
+    if (j * envShare + phase[h] < envShare) {
+      L = brdfa_sampleEnvironment(u, pdfEnv);
+      if (dot(N, L) > 0.0) {
+        f = BRDF(L, V, N, X, Y);
+        pdfBrdf = brdfa_brdfSidePdf(L, V, N, X, Y);
+      }
+    } else {
+#if defined(BRDFA_MIS_FILE_SAMPLER)
+      f = sampleBRDF(brdfa_unorm2(u.xy), V, N, X, Y, L, pdfBrdf);
+#else
+      float unusedWeight;
+      vec3 l = brdfa_sampleCosineHemisphere(brdfa_unorm2(u.xy), unusedWeight);
+      L = X * l.x + Y * l.y + N * l.z;
+      pdfBrdf = l.z / BRDFA_PI;
+      f = BRDF(L, V, N, X, Y);
+#endif
+      // guard: a rejected draw (pdf 0) contributes 0 and needs no environment density.
+      pdfEnv = pdfBrdf > 0.0 ? brdfa_environmentPdf(L) : 0.0;
+    }
+    float NoL = dot(N, L);
+    // The balance heuristic over the mixture: f L cos / ((1 - c) p_brdf + c p_env). The
+    // environment's density is never 0 (its table has a floor), so neither is the sum where
+    // NoL > 0.
+    vec3 c = NoL > 0.0 && (pdfBrdf > 0.0 || pdfEnv > 0.0)
+                 ? f * brdfa_environmentUnit(L) * (NoL / (cBrdf * pdfBrdf + cEnv * pdfEnv))
+                 : vec3(0.0);
 #else
     float weight;  // cos / pdf
-    vec3 l = brdfa_sampleHemisphere(brdfa_sample2D(rotation, first + s), weight);
+    vec3 l = brdfa_sampleHemisphere(brdfa_unorm2(u.xy), weight);
     vec3 L = X * l.x + Y * l.y + N * l.z;
     vec3 c = BRDF(L, V, N, X, Y) * brdfa_environmentUnit(L) * weight;
 #endif
@@ -74,16 +168,26 @@ void main() {
       ++dropped;
       continue;
     }
-    sum += c;
+    if (h == 0u) {
+      sums[0] += c;
+      ++kept[0];
+    } else {
+      sums[1] += c;
+      ++kept[1];
+    }
   }
-  vec4 value = vec4(sum * brdfa_environmentIntensity(), float(count - dropped));
+  float intensity = brdfa_environmentIntensity();
+  vec4 valueA = vec4(sums[0] * intensity, float(kept[0]));
+  vec4 valueB = vec4(sums[1] * intensity, float(kept[1]));
+  uint offsetB = brdfa_halfOffset(1u) + pixel;
   if (brdfa_pc.target.w != 0u) {
-    // First pass after a restart (always half A): overwrite this pixel's halves instead of
-    // adding, so a change of BRDF or parameters needs no clear of the whole buffer.
-    brdfa_accum[pixel] = value;
-    brdfa_accum[brdfa_halfOffset(1u) + pixel] = vec4(0.0);
+    // First pass after a restart: overwrite this pixel's halves instead of adding, so a change
+    // of BRDF or parameters needs no clear of the whole buffer.
+    brdfa_accum[pixel] = valueA;
+    brdfa_accum[offsetB] = valueB;
   } else {
-    brdfa_accum[brdfa_halfOffset(brdfa_pc.target.y) + pixel] += value;
+    brdfa_accum[pixel] += valueA;
+    brdfa_accum[offsetB] += valueB;
   }
   if (dropped != 0u) atomicAdd(brdfa_nanSamples, dropped);
 }

@@ -10,14 +10,19 @@
 //   2 tangent:  xyz world tangent, w = texCoord.y
 layout(std430, set = 0, binding = 0) readonly buffer BrdfaGbuffer { vec4 brdfa_gbuffer[]; };
 
-// Two half accumulators (passes alternate between them): rgb = sum of radiance samples,
-// a = number of samples kept. Their difference estimates the error of the combined mean.
+// Two half accumulators (sample i of a pixel goes to half i & 1, each half with its own random
+// sequence): rgb = sum of radiance samples, a = number of samples kept. The difference of
+// their means estimates the error of the combined mean.
 layout(std430, set = 0, binding = 3) buffer BrdfaAccum { vec4 brdfa_accum[]; };
 layout(std430, set = 0, binding = 4) buffer BrdfaCounters { uint brdfa_nanSamples; uint brdfa_counterPad[3]; };
 layout(set = 0, binding = 5) uniform samplerCube brdfa_envMap;
 layout(std430, set = 0, binding = 6) writeonly buffer BrdfaOutRgba8 { uint brdfa_outRgba8[]; };
 layout(std430, set = 0, binding = 7) writeonly buffer BrdfaOutFloat { vec4 brdfa_outFloat[]; };
 layout(std430, set = 0, binding = 8) writeonly buffer BrdfaPartials { vec4 brdfa_partials[]; };
+// The environment's importance-sampling table (renderer/src/environment_sampling.h): entry 0
+// (cells per face edge D, effective density, 0, 0), then per cell (q, alias bits, density,
+// alias's density). A constant environment binds a header with D = 0.
+layout(std430, set = 0, binding = 9) readonly buffer BrdfaEnvTable { vec4 brdfa_envTable[]; };
 
 layout(push_constant) uniform BrdfaPush {
   vec4 cameraPos;      // xyz
@@ -26,7 +31,7 @@ layout(push_constant) uniform BrdfaPush {
   vec4 cameraForward;  // xyz, unit
   vec4 env;            // x intensity, y cos(rotation), z sin(rotation)
   uvec4 frame;         // x width, y height, z index of this pass's first sample, w samples this pass
-  uvec4 target;        // x object id (1-based), y half accumulator (0|1),
+  uvec4 target;        // x object id (1-based), y unused,
                        // z shade: dispatch origin x | y << 16; resolve: write float output,
                        // w first pass after a restart (overwrite instead of add)
   vec4 tone;           // x exposure scale 2^exposure, y tone map (0 clamp, 1 reinhard, 2 aces)

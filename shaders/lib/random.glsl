@@ -27,3 +27,31 @@ vec2 brdfa_sample2D(uvec2 rotation, uint i) {
   uvec2 r = rotation + i * uvec2(3242174889u, 2447445414u);  // round(2^32 / g), round(2^32 / g^2)
   return vec2(r >> 8u) * (1.0 / 16777216.0);
 }
+
+// --- Four dimensions per sample, two independent replicates (issue 11).
+//
+// Sample i of a pixel goes to half accumulator i & 1 as point j = i >> 1 of that half's own
+// sequence, shifted by that half's own random rotation: the two halves are statistically
+// independent randomised-QMC estimates, so the difference of their means measures the error of
+// the combined mean (resolve), and no pass partition changes which sample a half gets.
+// .xy is the R2 point j (the best 2D lattice for the hemisphere samplers and the environment's
+// cell and alias choice); .zw is the same R2 point with an independent random shift (the
+// position inside an environment cell). Each point is uniform in [0,1)^4 with independent
+// coordinates, because every shift is independent and uniform: the estimate stays unbiased.
+uvec4 brdfa_halfRotation(uvec2 pixel, uint halfIndex) {
+  uint h = brdfa_hash(pixel.x ^ brdfa_hash(pixel.y + 0x9e3779b9u) ^ (halfIndex * 0x632be5abu + 0x5bd1e995u));
+  uint h1 = brdfa_hash(h ^ 0x85ebca6bu);
+  uint h2 = brdfa_hash(h1 ^ 0xc2b2ae35u);
+  uint h3 = brdfa_hash(h2 ^ 0x27d4eb2fu);
+  return uvec4(h, h1, h2, h3);
+}
+
+// Point j of the rotated sequences: four uniform 32-bit values.
+uvec4 brdfa_sample4D(uvec4 rotation, uint j) {
+  uvec2 r2 = j * uvec2(3242174889u, 2447445414u);  // round(2^32 / g), round(2^32 / g^2), as above
+  return rotation + uvec4(r2, r2);
+}
+
+// A 32-bit uniform value as a float in [0, 1): 24 bits, exact, never 1.
+float brdfa_unorm(uint u) { return float(u >> 8u) * (1.0 / 16777216.0); }
+vec2 brdfa_unorm2(uvec2 u) { return vec2(u >> 8u) * (1.0 / 16777216.0); }

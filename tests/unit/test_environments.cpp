@@ -34,8 +34,7 @@ constexpr double kPi = 3.14159265358979323846;
 
 glm::vec3 texel(const EnvironmentData& env, int face, uint32_t x, uint32_t y) {
   size_t i = ((size_t(face) * env.faceSize + y) * env.faceSize + x) * 4;
-  return {glm::unpackHalf1x16(env.texels[i]), glm::unpackHalf1x16(env.texels[i + 1]),
-          glm::unpackHalf1x16(env.texels[i + 2])};
+  return {env.texels[i], env.texels[i + 1], env.texels[i + 2]};
 }
 
 glm::vec3 texelDirection(int face, uint32_t x, uint32_t y, uint32_t size) {
@@ -124,7 +123,7 @@ void expectInvalid(const Result<EnvironmentData>& r, const std::string& needle) 
 
 void expectFiniteAndInRange(const EnvironmentData& env, float lo, float hi) {
   for (size_t i = 0; i < env.texels.size(); ++i) {
-    float v = glm::unpackHalf1x16(env.texels[i]);
+    float v = env.texels[i];
     ASSERT_TRUE(std::isfinite(v)) << "texel value " << i;
     ASSERT_GE(v, lo) << "texel value " << i;
     ASSERT_LE(v, hi) << "texel value " << i;
@@ -322,8 +321,7 @@ TEST(EnvironmentEquirect, LossyExrCompressionsDecode) {
       ASSERT_EQ(env.faceSize, fromHdr.faceSize);
       double worst = 0;
       for (size_t i = 0; i < env.texels.size(); ++i)
-        worst = std::max(worst, double(std::abs(glm::unpackHalf1x16(env.texels[i]) -
-                                                glm::unpackHalf1x16(fromHdr.texels[i]))));
+        worst = std::max(worst, double(std::abs(env.texels[i] - fromHdr.texels[i])));
       EXPECT_LT(worst, 0.05);
     }
   }
@@ -441,17 +439,32 @@ TEST(EnvironmentEquirect, BrightSpotLandsInTheRightTexel) {
   EXPECT_LT(angleDegrees(b.direction, {0, 0, -1}), 2.0);
 }
 
-TEST(EnvironmentEquirect, HugeAndNegativeValuesAreClamped) {
+TEST(EnvironmentEquirect, NegativeValuesAreClampedAndHugeOnesKept) {
   const int w = 64, h = 32;
   auto rgb = equirectImage(w, h, [](int x, int y) {
     return x == 10 && y == 10 ? glm::vec3(1e6f) : glm::vec3(x == 20 ? -5.0f : 0.5f);
   });
   EnvironmentData fromExr = decodeOk(encodeExr(w, h, rgb, false));
-  expectFiniteAndInRange(fromExr, 0.0f, 65504.0f);
-  EXPECT_GT(brightestTexel(fromExr).direction.y, 0.0f);  // the clamped spot is still the peak
-  // RGBE holds neither negatives nor non-finite values; a huge one is clamped.
+  expectFiniteAndInRange(fromExr, 0.0f, 1e6f);
+  EXPECT_GT(brightestTexel(fromExr).direction.y, 0.0f);
+  // Far above the half-float range (issue 11): the spot's energy must survive the cube.
+  float brightest = 0;
+  for (size_t i = 0; i < fromExr.texels.size(); i += 4) brightest = std::max(brightest, fromExr.texels[i]);
+  EXPECT_GT(brightest, 65504.0f);
+  HalfCube packed = packHalfCube(fromExr);
+  EXPECT_GE(packed.scale, brightest / 65504.0f);
+  EXPECT_LT(packed.scale, 2 * brightest / 65504.0f);  // the smallest power of two that fits
+  for (size_t i = 0; i < packed.texels.size(); ++i) {
+    const float v = glm::unpackHalf1x16(packed.texels[i]) * (i % 4 == 3 ? 1.0f : packed.scale);
+    ASSERT_TRUE(std::isfinite(v)) << i;
+    const float want = fromExr.texels[i];
+    ASSERT_NEAR(v, want, want * 1e-3f + 1e-4f * packed.scale) << i;
+  }
+  // RGBE holds neither negatives nor non-finite values; a huge one is kept.
   auto positive = equirectImage(w, h, [](int x, int y) { return glm::vec3(x == 10 && y == 10 ? 1e6f : 0.5f); });
-  expectFiniteAndInRange(decodeOk(encodeHdr(w, h, positive)), 0.0f, 65504.0f);
+  expectFiniteAndInRange(decodeOk(encodeHdr(w, h, positive)), 0.0f, 1e6f);
+  EXPECT_EQ(packHalfCube(decodeOk(encodeHdr(w, h, rgb))).scale > 1.0f, true);
+  EXPECT_EQ(packHalfCube(*makeBuiltinEnvironment("sky")).scale, 1.0f);  // in range: stored as before
 }
 
 TEST(EnvironmentEquirect, NonFiniteExrValuesAreRefused) {
@@ -751,7 +764,7 @@ TEST(EnvironmentFiles, BlenderStudioWorldsDecode) {
               << " ms, to the cube in " << totalMs << " ms\n";
     EXPECT_EQ(source.format, AssetFormat::Exr);
     EXPECT_EQ(source.width, 2 * source.height);
-    expectFiniteAndInRange(*env, 0.0f, 65504.0f);
+    expectFiniteAndInRange(*env, 0.0f, 1e9f);
   }
   EXPECT_GT(files, 0) << "no .exr in " << dir;
 }
