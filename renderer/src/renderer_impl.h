@@ -96,7 +96,8 @@ class RendererImpl final : public Renderer, public std::enable_shared_from_this<
   // output of `outputVec4s` vec4; `consume` reads the output after each run.
   Result<void> runCheckKernel(const BrdfDefinition& brdf, const char* kernel, uint32_t invocations,
                               uint32_t outputVec4s, const std::vector<std::map<std::string, Vec3>>& settings,
-                              const std::function<void(const float*)>& consume);
+                              const std::function<void(const float*)>& consume,
+                              const std::vector<float>& input = {});
   // The pipeline of an assembled program; compiled once, then served from the cache.
   // `created` (optional) tells whether this call built the pipeline.
   Result<std::shared_ptr<const ShadeKernel>> compiledKernel(const AssembledProgram& program,
