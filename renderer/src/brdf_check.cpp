@@ -155,7 +155,7 @@ Result<void> RendererImpl::runCheckKernel(const BrdfDefinition& brdf, const char
                                           uint32_t outputVec4s,
                                           const std::vector<std::map<std::string, Vec3>>& settings,
                                           const std::function<void(const float*)>& consume,
-                                          const std::vector<float>& input) {
+                                          const std::vector<float>& input, const GpuEnvironment* env) {
   if (brdf.format == BrdfFormat::Legacy)
     return makeError(ErrorCode::Unsupported, "legacy render() BRDFs are rendered, not analysed");
   auto kernel = compiledKernel(assembleCheckProgram(brdf, kernelName));
@@ -204,11 +204,14 @@ Result<void> RendererImpl::runCheckKernel(const BrdfDefinition& brdf, const char
   VkDescriptorBufferInfo outInfo{output->handle(), 0, VK_WHOLE_SIZE};
   VkDescriptorBufferInfo inInfo{input.empty() ? output->handle() : inputBuffer.handle(), 0, VK_WHOLE_SIZE};
   VkDescriptorBufferInfo paramInfo{params->handle(), 0, VK_WHOLE_SIZE};
-  VkDescriptorImageInfo envInfo{envSampler_, (*furnace)->cube.view(), VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL};
+  if (!env) env = furnace->get();
+  VkDescriptorImageInfo envInfo{envSampler_, env->cube.view(), VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL};
+  VkDescriptorBufferInfo tableInfo{env->table.handle(), 0, VK_WHOLE_SIZE};
   std::vector<VkWriteDescriptorSet> writes;
   for (uint32_t binding : {0u, 3u, 4u, 6u, 7u, 8u, 9u})
     writes.push_back({VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET, nullptr, sets[0], binding, 0, 1,
-                      VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, nullptr, binding == 0 ? &inInfo : &outInfo, nullptr});
+                      VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, nullptr,
+                      binding == 0 ? &inInfo : binding == 9 ? &tableInfo : &outInfo, nullptr});
   writes.push_back({VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET, nullptr, sets[0], 5, 0, 1,
                     VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, &envInfo, nullptr, nullptr});
   for (uint32_t binding : {0u, 1u})

@@ -7,6 +7,7 @@
 #include <string>
 #include <vector>
 
+#include "environment_sampling.h"
 #include "program_assembler.h"
 #include "vk_resources.h"
 
@@ -30,6 +31,7 @@ struct GpuEnvironment {
   // Importance-sampling table (environment_sampling.h), a storage buffer at set 0 binding 9; a
   // constant environment has only the header (D = 0: kernels sample it uniformly).
   Buffer table;
+  std::shared_ptr<const EnvironmentDistribution> distribution;  // the same table on the host; null when constant
 };
 
 // A texture an object samples as iTexture0..3: RGBA8, sRGB-decoding or linear.

@@ -508,7 +508,8 @@ AssembledProgram RendererImpl::assembleCheckProgram(const BrdfDefinition& brdf, 
   const BrdfFeatures features = detectFeatures(brdf);
   if (features.textures) spec.defines.push_back("BRDFA_TEXTURES");
   if (features.samplerPdf) spec.defines.push_back("BRDFA_HAS_PDF");  // check_sampler: chi-square test
-  for (const char* piece : {"lib/bindings.glsl", "lib/random.glsl", "lib/sampling.glsl", "lib/brdf_inputs.glsl"})
+  for (const char* piece : {"lib/bindings.glsl", "lib/random.glsl", "lib/sampling.glsl", "lib/environment_sampling.glsl",
+                            "lib/brdf_inputs.glsl"})
     spec.commonChunks.push_back(sources_.get(piece));
   spec.integrator = sources_.get(std::string("kernels/") + kernel);
   return assembleProgram(spec);
@@ -630,8 +631,10 @@ Result<std::shared_ptr<GpuEnvironment>> RendererImpl::uploadEnvironment(const st
   if (!image) return image.takeError();
   const HalfCube half = packHalfCube(data);
   BRDFA_TRY(uploadImage(*ctx_, *image, half.texels.data(), half.texels.size() * sizeof(uint16_t)));
-  std::vector<float> table = {0.0f, float(1.0 / (4.0 * M_PI)), 0.0f, 0.0f};
-  if (!data.constant) table = buildEnvironmentDistribution(data).table;
+  std::shared_ptr<const EnvironmentDistribution> distribution;
+  std::vector<float> header = {0.0f, float(1.0 / (4.0 * M_PI)), 0.0f, 0.0f};
+  if (!data.constant) distribution = std::make_shared<const EnvironmentDistribution>(buildEnvironmentDistribution(data));
+  const std::vector<float>& table = distribution ? distribution->table : header;
   auto tableBuffer = deviceBufferWith(*ctx_, table.data(), table.size() * sizeof(float), VK_BUFFER_USAGE_STORAGE_BUFFER_BIT);
   if (!tableBuffer) return tableBuffer.takeError();
   auto env = std::make_shared<GpuEnvironment>();
@@ -640,6 +643,7 @@ Result<std::shared_ptr<GpuEnvironment>> RendererImpl::uploadEnvironment(const st
   env->scale = half.scale;
   env->cube = std::move(image.value());
   env->table = std::move(tableBuffer.value());
+  env->distribution = std::move(distribution);
   return env;
 }
 

@@ -42,6 +42,7 @@ class RendererImpl final : public Renderer, public std::enable_shared_from_this<
   Result<std::unique_ptr<RenderView>> createView() override;
   Result<BrdfCheckReport> checkBrdf(const BrdfDefinition& brdf) override;
   Result<SamplerCheckReport> checkSampler(const BrdfDefinition& brdf) override;
+  Result<EnvironmentSamplerReport> checkEnvironmentSampler(const std::string& environment) override;
   Result<int> preloadFromCache(const BrdfDefinition& brdf) override;
   RendererCounters counters() const override;
   Result<void> registerAsset(const std::string& name, AssetKind kind, const std::string& path) override;
@@ -97,7 +98,7 @@ class RendererImpl final : public Renderer, public std::enable_shared_from_this<
   Result<void> runCheckKernel(const BrdfDefinition& brdf, const char* kernel, uint32_t invocations,
                               uint32_t outputVec4s, const std::vector<std::map<std::string, Vec3>>& settings,
                               const std::function<void(const float*)>& consume,
-                              const std::vector<float>& input = {});
+                              const std::vector<float>& input = {}, const GpuEnvironment* env = nullptr);
   // The pipeline of an assembled program; compiled once, then served from the cache.
   // `created` (optional) tells whether this call built the pipeline.
   Result<std::shared_ptr<const ShadeKernel>> compiledKernel(const AssembledProgram& program,

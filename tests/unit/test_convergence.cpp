@@ -355,5 +355,21 @@ TEST_F(Convergence, TargetErrorStopsRenderingAndIsReportedApartFromMaxSamples) {
   EXPECT_TRUE(view->stats().maxSamplesReached);
 }
 
+TEST_F(Convergence, EnvironmentSamplerDrawsWhatItsPdfSays) {
+  // A bright spot of a few pixels far above half range over a dim sky, as a captured sun is.
+  registerEquirect("spot", 512, 256, [](int x, int y) { return x >= 300 && x < 302 && y >= 60 && y < 62 ? 2e5f : 2.0f; });
+  for (const char* name : {"sky", "studio", "cornell", "half_white", "spot"}) {
+    auto report = renderer_->checkEnvironmentSampler(name);
+    ASSERT_TRUE(report.ok()) << name << ": " << report.error().message;
+    std::printf("%-10s cells p %.3g, positions p %.3g, max |z| %.2f over %u bins, pdf mismatch %.2g (host %.2g, %.2g of draws), "
+                "length %.2g\n",
+                name, report->cellChi2PValue, report->positionChi2PValue, report->maxSolidAngleZ, report->solidAngleBins,
+                report->maxPdfMismatch, report->hostPdfMismatch, report->pdfMismatchFraction, report->maxLengthError);
+    EXPECT_TRUE(report->passed()) << name;
+    EXPECT_GE(report->solidAngleBins, 100u) << name;
+  }
+  EXPECT_FALSE(renderer_->checkEnvironmentSampler("furnace").ok()) << "the furnace has no table";
+}
+
 }  // namespace
 }  // namespace brdfa

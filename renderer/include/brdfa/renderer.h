@@ -207,6 +207,34 @@ struct SamplerCheckReport {
   }
 };
 
+// Checks of the environment sampler (issue 11) on the device, over 2^20 independent draws:
+//  - the cells drawn against the probabilities the alias table realises (Pearson chi-square over
+//    blocks of 4 x 4 cells, small blocks pooled), and the positions inside the cells against
+//    uniform (chi-square over 8 x 8 sub-cells): together, the draws follow the distribution;
+//  - the pdf the sampler returns as the density in solid angle of its draws, with no
+//    quadrature: over 20 x 40 equal-area (cos theta, phi) bins, the mean of 1_bin / pdf must
+//    equal the bin's solid angle (z-scores, over bins with at least 64 draws whose densities
+//    span at most a factor 8, where the error bar of that mean is reliable);
+//  - that pdf against brdfa_environmentPdf(direction) on the device and the host's table;
+//  - every direction of unit length.
+// A constant environment (the furnace) has no table and is sampled uniformly: NotFound there.
+struct EnvironmentSamplerReport {
+  uint64_t samples = 0;
+  double cellChi2PValue = 0;
+  double positionChi2PValue = 0;
+  double maxSolidAngleZ = 0;
+  uint32_t solidAngleBins = 0;  // bins the z-scores covered
+  double maxPdfMismatch = 0;   // largest relative |returned - brdfa_environmentPdf| (device)
+  double hostPdfMismatch = 0;  // largest relative |returned - the host's EnvironmentDistribution::pdf|
+  double pdfMismatchFraction = 0;  // draws off by more than 1e-3 (a cell edge rounded onto its neighbour)
+  double maxLengthError = 0;
+  std::string failure;  // why a chi-square test could not run
+  bool passed(double alpha = 1e-3, double zLimit = 5.0) const {
+    return failure.empty() && cellChi2PValue >= alpha && positionChi2PValue >= alpha && maxSolidAngleZ < zLimit &&
+           pdfMismatchFraction < 1e-3 && maxLengthError < 1e-5;
+  }
+};
+
 class Renderer {
  public:
   virtual ~Renderer() = default;
@@ -227,6 +255,9 @@ class Renderer {
 
   // Runs the sampler checks above; InvalidArgument when the file has no sample section.
   virtual Result<SamplerCheckReport> checkSampler(const BrdfDefinition& brdf) = 0;
+
+  // Runs the environment sampler checks above on `environment` (a built-in or registered name).
+  virtual Result<EnvironmentSamplerReport> checkEnvironmentSampler(const std::string& environment) = 0;
 
   // --hot-load (the BRDFA Engine's "hot start"): builds the shading pipelines of `brdf`, in every
   // sampling and environment variant, whose SPIR-V is already in the memory or disk cache;
