@@ -1,6 +1,6 @@
 // brdfa-bench: prints the figures DESIGN.md section 5 asks for, as medians, in one run: the
 // renderer's (library level) and the service's (through the real server over loopback HTTP).
-//   brdfa-bench [--rounds N] [--source DIR]
+//   brdfa-bench [--rounds N] [--source DIR] [--only renderer|scenes|sampling|http]
 #include <cstdio>
 #include <cstdlib>
 #include <algorithm>
@@ -14,20 +14,22 @@
 int main(int argc, char** argv) {
   std::string source = BRDFA_SOURCE_DIR;
   int rounds = 15;
+  std::string only;
   for (int i = 1; i < argc; ++i) {
     std::string a = argv[i];
     if (a == "--rounds" && i + 1 < argc) rounds = std::atoi(argv[++i]);
     else if (a == "--source" && i + 1 < argc) source = argv[++i];
+    else if (a == "--only" && i + 1 < argc) only = argv[++i];
     else {
-      std::fprintf(stderr, "usage: brdfa-bench [--rounds N] [--source DIR]\n");
+      std::fprintf(stderr, "usage: brdfa-bench [--rounds N] [--source DIR] [--only renderer|scenes|sampling|http]\n");
       return 2;
     }
   }
-  int code = brdfa::bench::runRendererBench(source, rounds);
-  if (code != 0) return code;
-  code = brdfa::bench::runSceneBench(source, rounds);
-  if (code != 0) return code;
-  code = brdfa::bench::runSamplingBench(source, std::max(1, rounds / 5));
-  if (code != 0) return code;
-  return brdfa::bench::runHttpBench(BRDFA_SERVER_BINARY, source);
+  auto wanted = [&](const char* part) { return only.empty() || only == part; };
+  int code = 0;
+  if (wanted("renderer") && (code = brdfa::bench::runRendererBench(source, rounds)) != 0) return code;
+  if (wanted("scenes") && (code = brdfa::bench::runSceneBench(source, rounds)) != 0) return code;
+  if (wanted("sampling") && (code = brdfa::bench::runSamplingBench(source, std::max(1, rounds / 5))) != 0) return code;
+  if (wanted("http")) code = brdfa::bench::runHttpBench(BRDFA_SERVER_BINARY, source);
+  return code;
 }

@@ -33,7 +33,10 @@ float bitsFloat(uint32_t u) {
 
 EnvironmentDistribution buildEnvironmentDistribution(const EnvironmentData& env, uint32_t maxCellsPerEdge) {
   const uint32_t F = std::max<uint32_t>(env.faceSize, 1);
-  const uint32_t D = std::min(F, std::max<uint32_t>(maxCellsPerEdge, 1));
+  // D is a power of two, so the kernels split a cell index with shifts (integer division is
+  // scalar code on a CPU device's SIMD lanes); cells then cover whole or fractional texel ranges.
+  uint32_t D = 1;
+  while (D * 2 <= std::min(F, std::max<uint32_t>(maxCellsPerEdge, 1))) D *= 2;
   const size_t cells = size_t(6) * D * D;
 
   // Luminance of each texel, blurred by the tent of bilinear filtering (clamped at face edges).
@@ -60,7 +63,9 @@ EnvironmentDistribution buildEnvironmentDistribution(const EnvironmentData& env,
   for (uint32_t f = 0; f < 6; ++f)
     for (uint32_t cy = 0; cy < D; ++cy)
       for (uint32_t cx = 0; cx < D; ++cx) {
-        const uint32_t x0 = cx * F / D, x1 = (cx + 1) * F / D, y0 = cy * F / D, y1 = (cy + 1) * F / D;
+        // The texels whose centres fall in the cell (at least one: D <= F).
+        const uint32_t x0 = cx * F / D, y0 = cy * F / D;
+        const uint32_t x1 = std::max((cx + 1) * F / D, x0 + 1), y1 = std::max((cy + 1) * F / D, y0 + 1);
         double sum = 0;
         for (uint32_t y = y0; y < y1; ++y)
           for (uint32_t x = x0; x < x1; ++x) sum += blurred[at(int(f), int(x), int(y))];
@@ -123,6 +128,7 @@ EnvironmentDistribution buildEnvironmentDistribution(const EnvironmentData& env,
   out.table.resize(4 * (cells + 1));
   out.table[0] = float(D);
   out.table[1] = float(effective);
+  out.table[2] = float(std::log2(double(D)));
   for (size_t c = 0; c < cells; ++c) {
     float* e = &out.table[4 * (c + 1)];
     e[0] = float(q[c]);

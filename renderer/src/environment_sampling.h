@@ -18,9 +18,9 @@
 namespace brdfa {
 
 struct EnvironmentDistribution {
-  uint32_t cellsPerEdge = 0;      // D: cells per face edge (a face is D x D cells)
+  uint32_t cellsPerEdge = 0;      // D: cells per face edge (a face is D x D cells), a power of two
   double effectiveDensity = 0;    // integral of pdf^2 over the sphere: how concentrated it is
-  // 4 floats an entry. Entry 0: (D, effectiveDensity, 0, 0). Entry 1 + c for cell
+  // 4 floats an entry. Entry 0: (D, effectiveDensity, log2 D, 0). Entry 1 + c for cell
   // c = (face * D + row) * D + column: (q_c, alias_c as uint bits, density_c, density_alias_c),
   // density = P(cell) * (D/2)^2, so pdf(w) = density / |w_major|^3.
   std::vector<float> table;
@@ -32,7 +32,8 @@ struct EnvironmentDistribution {
   std::vector<double> realisedCellProbabilities() const;
 };
 
-// Cells: the cube's texels, or groups of texels when faces are larger than `maxCellsPerEdge`.
+// Cells: the cube's texels, or groups of texels: D is the largest power of two up to both the
+// face size and `maxCellsPerEdge`.
 // A cell's weight is the integral of the bilinearly filtered radiance's luminance over it
 // (each texel's luminance blurred by [1/8, 3/4, 1/8] in s and t, the exact cell integral of the
 // tent each texel spreads into its neighbours), times the cell's solid angle, plus a uniform floor

@@ -44,7 +44,7 @@ bool sameGeometry(const Scene& a, const Scene& b) {
 bool sameLighting(const Scene& a, const Scene& b) {
   const EnvironmentSettings &ea = a.environment, &eb = b.environment;
   return ea.name == eb.name && ea.intensity == eb.intensity && ea.rotation == eb.rotation &&
-         ea.visible == eb.visible && a.render.sampling == b.render.sampling;
+         ea.visible == eb.visible && a.render.sampling == b.render.sampling && a.render.seed == b.render.seed;
 }
 
 }  // namespace
@@ -386,6 +386,7 @@ ComputePush RenderViewImpl::basePush() const {
   p.env[2] = std::sin(rot);
   p.frame[0] = width_;
   p.frame[1] = height_;
+  p.target[1] = scene_.render.seed;
   p.tone[0] = std::exp2(scene_.render.exposure);
   p.tone[1] = static_cast<float>(static_cast<int>(scene_.render.toneMap));  // 0 clamp, 1 reinhard, 2 aces
   return p;

@@ -12,6 +12,7 @@ void main() {
   uint h1 = brdfa_hash(h0 ^ 0xa54ff53au);
   uint h2 = brdfa_hash(h1 ^ 0x510e527fu);
   uint h3 = brdfa_hash(h2 ^ 0x9b05688cu);
+  brdfa_environmentBegin();
   float pdf;
   vec3 d = brdfa_sampleEnvironment(uvec4(h0, h1, h2, h3), pdf);
   brdfa_accum[2u * k] = vec4(d, pdf);

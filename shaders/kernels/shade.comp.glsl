@@ -12,8 +12,8 @@
 //    sequence frac(j c + phi) < c with a random phi per pixel and half: each sample is drawn
 //    from the mixture exactly (so the estimate is unbiased for every j and every pass split),
 //    yet the counts per strategy are c N to within one, without the noise of a coin flip.
-//    c is chosen per pixel from how concentrated each side is (misEnvironmentFraction);
-//    it only changes the variance.
+//    c is chosen per pixel from how concentrated each side is (misEnvironmentFraction), in
+//    eighths; it only changes the variance.
 // Samples that are NaN or Inf are dropped and counted, never accumulated, and the pixel's mean
 // divides by the samples kept. Sample i of a pixel goes to half accumulator i & 1 (see
 // lib/random.glsl): the halves are independent estimates, and the resolve measures the error
@@ -41,9 +41,9 @@ float brdfa_brdfSidePdf(vec3 L, vec3 V, vec3 N, vec3 X, vec3 Y) {
 // is a density: the BRDF side's at the mirror direction R (its lobe's peak for glossy files,
 // cos/pi for diffuse ones), the environment's either over the whole map (its effective density,
 // what matters to a wide lobe) or at R (what a narrow lobe sees), blended by how narrow the lobe
-// is. The more concentrated side gets more samples, within [0.1, 0.9] so neither side is ever
-// starved: the bound caps the variance cost of a wrong guess at 1/0.9 for the side that
-// should have had all samples, or 10x for the other.
+// is. The more concentrated side gets more samples, within [1/8, 7/8] (the caller rounds c to
+// eighths) so neither side is ever starved: the bound caps the variance cost of a wrong guess at
+// 8/7 for the side that should have had all samples, or 8x for the other.
 float brdfa_misEnvironmentFraction(vec3 V, vec3 N, vec3 X, vec3 Y) {
   vec3 R = reflect(-V, N);
   float lobe = brdfa_brdfSidePdf(R, V, N, X, Y);
@@ -52,7 +52,7 @@ float brdfa_misEnvironmentFraction(vec3 V, vec3 N, vec3 X, vec3 Y) {
   lobe = lobe >= 0.0 ? min(lobe, 1e30) : 1.0 / BRDFA_PI;
   float narrow = lobe / (lobe + 1.0);
   float env = mix(brdfa_environmentConcentration(), brdfa_environmentPdf(R), narrow);
-  return clamp(env / (env + lobe), 0.1, 0.9);
+  return env / (env + lobe);
 }
 #endif
 
@@ -85,14 +85,20 @@ void main() {
   brdfa_basisFromNormal(N, X, Y);
 #endif
 
-  uvec4 rotation[2] = uvec4[2](brdfa_halfRotation(p, 0u), brdfa_halfRotation(p, 1u));
+  uint seed = brdfa_pc.target.y;  // render.seed
+  uvec4 rotation[2] = uvec4[2](brdfa_halfRotation(p, 0u, seed), brdfa_halfRotation(p, 1u, seed));
+  brdfa_environmentBegin();
 #if defined(BRDFA_SAMPLING_MIS)
-  // c in 0.24 fixed point, so the strategy test below and the weight use exactly the same c.
-  uint envShare = uint(brdfa_misEnvironmentFraction(V, N, X, Y) * 16777216.0) << 8u;
-  float cEnv = float(envShare >> 8u) * (1.0 / 16777216.0);
+  // c in eighths (0.125 .. 0.875), exact in 32-bit fixed point, so the strategy test below and
+  // the weight use exactly the same c. The phase is one random number per half for the whole
+  // image: neighbouring pixels with the same c then pick the same strategy for the same sample,
+  // so the SIMD lanes of a CPU device (and the threads of a GPU warp) rarely diverge. Each sample
+  // is still drawn from the mixture exactly (the phase is uniform), and the halves stay
+  // independent (each has its own phase).
+  float cEnv = clamp(round(brdfa_misEnvironmentFraction(V, N, X, Y) * 8.0), 1.0, 7.0) * 0.125;
+  uint envShare = uint(cEnv * 8.0) << 29u;
   float cBrdf = 1.0 - cEnv;
-  uvec2 phase = uvec2(rotation[0].x ^ 0xa511e9b3u, rotation[1].x ^ 0x63d83595u);
-  phase = uvec2(brdfa_hash(phase.x), brdfa_hash(phase.y));
+  uvec2 phase = uvec2(brdfa_hash(seed ^ 0xa511e9b3u), brdfa_hash(seed ^ 0x63d83595u));
 #endif
   uint first = brdfa_pc.frame.z;
   uint count = brdfa_pc.frame.w;

@@ -31,7 +31,7 @@ layout(push_constant) uniform BrdfaPush {
   vec4 cameraForward;  // xyz, unit
   vec4 env;            // x intensity, y cos(rotation), z sin(rotation)
   uvec4 frame;         // x width, y height, z index of this pass's first sample, w samples this pass
-  uvec4 target;        // x object id (1-based), y unused,
+  uvec4 target;        // x object id (1-based), y render.seed,
                        // z shade: dispatch origin x | y << 16; resolve: write float output,
                        // w first pass after a restart (overwrite instead of add)
   vec4 tone;           // x exposure scale 2^exposure, y tone map (0 clamp, 1 reinhard, 2 aces)

@@ -37,6 +37,18 @@ uint brdfa_cubeFaceCoords(vec3 d, out vec2 st, out float major) {
   return face;
 }
 
+// The table's header, read once per pixel (brdfa_environmentBegin) instead of once per sample.
+uint brdfa_envLog2D = 0u;  // log2 of cells per face edge
+float brdfa_envD = 0.0;    // cells per face edge
+
+void brdfa_environmentBegin() {
+#if !defined(BRDFA_ENV_CONSTANT)
+  vec4 header = brdfa_envTable[0];
+  brdfa_envD = header.x;
+  brdfa_envLog2D = uint(header.z);
+#endif
+}
+
 // Density in solid angle of brdfa_sampleEnvironment's draws at unit direction `d`:
 // density(cell) / |d_major|^3 (environment_sampling.h derives it).
 float brdfa_environmentPdf(vec3 d) {
@@ -46,17 +58,18 @@ float brdfa_environmentPdf(vec3 d) {
   vec2 st;
   float major;
   uint face = brdfa_cubeFaceCoords(d, st, major);
-  uint D = uint(brdfa_envTable[0].x);
+  uint last = (1u << brdfa_envLog2D) - 1u;
   // guard: s or t at exactly +1 (the face's far edge) would index one cell past the row.
-  uvec2 cell = min(uvec2(max((st + 1.0) * (0.5 * float(D)), vec2(0.0))), uvec2(D - 1u));
-  return brdfa_envTable[1u + (face * D + cell.y) * D + cell.x].z / (major * major * major);
+  uvec2 cell = min(uvec2(max((st + 1.0) * (0.5 * brdfa_envD), vec2(0.0))), uvec2(last));
+  uint index = (((face << brdfa_envLog2D) + cell.y) << brdfa_envLog2D) + cell.x;
+  return brdfa_envTable[1u + index].z / (major * major * major);
 #endif
 }
 
 // Draws a unit direction from the environment's distribution and sets its solid-angle density.
 // u.x picks a cell (all 32 bits: the pick is uniform over the cells to 1 part in 2^32 / cells),
 // u.y decides between the cell and its alias, u.zw place the point in the cell uniformly in
-// (s, t).
+// (s, t). D is a power of two, so the cell index splits with shifts.
 vec3 brdfa_sampleEnvironment(uvec4 u, out float pdf) {
 #if defined(BRDFA_ENV_CONSTANT)
   float z = 1.0 - 2.0 * brdfa_unorm(u.x);
@@ -65,20 +78,18 @@ vec3 brdfa_sampleEnvironment(uvec4 u, out float pdf) {
   pdf = 1.0 / (4.0 * BRDFA_PI);
   return vec3(r * cos(phi), r * sin(phi), z);
 #else
-  uint D = uint(brdfa_envTable[0].x);
-  uint faceCells = D * D;
   uint cell, unused;
-  umulExtended(u.x, 6u * faceCells, cell, unused);  // floor(u.x * cells / 2^32)
+  umulExtended(u.x, 6u << (2u * brdfa_envLog2D), cell, unused);  // floor(u.x * cells / 2^32)
   vec4 e = brdfa_envTable[1u + cell];
   float density = e.z;
   if (brdfa_unorm(u.y) >= e.x) {
     cell = floatBitsToUint(e.y);
     density = e.w;
   }
-  uint face = cell / faceCells;
-  uint inFace = cell - face * faceCells;
-  uvec2 c = uvec2(inFace % D, inFace / D);
-  vec2 st = (vec2(c) + brdfa_unorm2(u.zw)) * (2.0 / float(D)) - 1.0;
+  uint last = (1u << brdfa_envLog2D) - 1u;
+  uint face = cell >> (2u * brdfa_envLog2D);
+  uvec2 c = uvec2(cell & last, (cell >> brdfa_envLog2D) & last);
+  vec2 st = (vec2(c) + brdfa_unorm2(u.zw)) * (2.0 / brdfa_envD) - 1.0;
   vec3 d = brdfa_cubeFacePoint(face, st);
   float r2 = dot(d, d);  // 1 + s^2 + t^2 >= 1
   pdf = density * r2 * sqrt(r2);

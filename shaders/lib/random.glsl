@@ -38,8 +38,8 @@ vec2 brdfa_sample2D(uvec2 rotation, uint i) {
 // cell and alias choice); .zw is the same R2 point with an independent random shift (the
 // position inside an environment cell). Each point is uniform in [0,1)^4 with independent
 // coordinates, because every shift is independent and uniform: the estimate stays unbiased.
-uvec4 brdfa_halfRotation(uvec2 pixel, uint halfIndex) {
-  uint h = brdfa_hash(pixel.x ^ brdfa_hash(pixel.y + 0x9e3779b9u) ^ (halfIndex * 0x632be5abu + 0x5bd1e995u));
+uvec4 brdfa_halfRotation(uvec2 pixel, uint halfIndex, uint seed) {
+  uint h = brdfa_hash(pixel.x ^ brdfa_hash(pixel.y + 0x9e3779b9u) ^ brdfa_hash(halfIndex * 0x632be5abu + seed));
   uint h1 = brdfa_hash(h ^ 0x85ebca6bu);
   uint h2 = brdfa_hash(h1 ^ 0xc2b2ae35u);
   uint h3 = brdfa_hash(h2 ^ 0x27d4eb2fu);

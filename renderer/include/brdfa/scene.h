@@ -57,6 +57,10 @@ struct RenderSettings {
   SamplingMode sampling = SamplingMode::Mis;
   // Rendering stops once rel_error <= targetError (FrameStats::converged); 0 means no target.
   double targetError = 0;
+  // Picks the random shifts of every pixel's sample sequences: renders of one scene with
+  // different seeds are statistically independent estimates (references, replicates); the
+  // same seed renders the same image. A change restarts accumulation.
+  uint32_t seed = 0;
   float exposure = 0.0f;  // stops; PNG = sRGB(tonemap(L * 2^exposure))
   ToneMap toneMap = ToneMap::Clamp;
 };
