@@ -47,9 +47,9 @@ async function capSamples(env, sid) {
   await http(env, 'PATCH', `/api/sessions/${sid}/scene`, { render: { max_samples: 16 } });
 }
 
-/** Waits until the session converged and the frame on screen is its final one. */
+/** Waits until the session is done (max_samples reached) and the frame on screen is its final one. */
 async function settle(env, page, sid) {
-  await until('convergence', async () => (await http(env, 'GET', `/api/sessions/${sid}/stats`)).converged);
+  await until('rendering done', async () => (await http(env, 'GET', `/api/sessions/${sid}/stats`)).done);
   let prev = await env.grab(page);
   return until('a stable frame', async () => {
     await sleep(150);
