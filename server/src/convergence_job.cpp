@@ -61,6 +61,10 @@ Result<ConvergenceJobSpec> parseConvergenceJob(const json& body, const SceneReso
     return e;
   }
   spec.scene = std::move(scene.value());
+  if (static_cast<long long>(spec.scene.render.width) * spec.scene.render.height > kConvergenceMaxPixels)
+    return invalid("scene.render", "a comparison renders at most " + std::to_string(kConvergenceMaxPixels) +
+                                       " pixels (e.g. 1024x1024), got " + std::to_string(spec.scene.render.width) +
+                                       "x" + std::to_string(spec.scene.render.height));
   spec.sceneJson = sceneToJson(spec.scene);
 
   if (auto it = body.find("modes"); it != body.end()) {
@@ -129,6 +133,8 @@ Result<json> runConvergenceJob(Renderer& renderer, const ConvergenceJobSpec& spe
   base.environment.visible = false;
   base.render.maxSamples = kMaxTotalSamples;
   base.render.targetError = 0;
+  const int pixels = base.render.width * base.render.height;
+  base.render.samplesPerFrame = std::clamp(kConvergenceSamplesPerPass / std::max(pixels, 1), 1, base.render.samplesPerFrame);
   auto sceneFor = [&](SamplingMode mode) {
     Scene s = base;
     s.render.sampling = mode;

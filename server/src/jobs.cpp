@@ -181,7 +181,11 @@ std::optional<json> JobManager::describe(const std::string& id) const {
       json out{{"id", job->id}, {"kind", job->kind}, {"state", state}, {"progress", job->progress},
                {"request", job->request}};
       if (job->result) out["result"] = *job->result;
-      if (job->error) out["error"] = {{"error", errorName(job->error->code)}, {"message", job->error->message}};
+      if (job->error) {
+        out["error"] = {{"error", errorName(job->error->code)}, {"message", job->error->message}};
+        if (!job->error->field.empty()) out["error"]["field"] = job->error->field;
+        if (!job->error->diagnostics.empty()) out["error"]["diagnostics"] = diagnosticsToJson(job->error->diagnostics);
+      }
       return out;
     }
     size_t total = job->items.size();

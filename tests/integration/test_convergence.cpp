@@ -388,6 +388,7 @@ TEST_F(Convergence, BadJobRequestsAre400) {
   for (const json& t : {json(50), json(60001), json(300.5), json("300"), json(nullptr), json(-1)})
     expectError(job({{"scene", scene}, {"time_ms", t}}), 400, "time_ms");
   expectError(job({{"scene", scene}, {"reference_ms", 240001}}), 400, "reference_ms");
+  expectError(job({{"scene", {{"render", {{"width", 2048}, {"height", 1024}}}}}}), 400, "scene.render");
   auto bad = post("/api/jobs/convergence", "{not json");
   ASSERT_TRUE(bad);
   EXPECT_EQ(bad->status, 400);

@@ -5,7 +5,9 @@
 // How it measures:
 // - One RenderView per mode, all with the same scene except render.sampling, the environment
 //   hidden (only object pixels carry radiance, so the error is the objects' alone),
-//   render.max_samples lifted to the renderer's limit and no target_error (the budget is time).
+//   render.max_samples lifted to the renderer's limit and no target_error (the budget is time),
+//   passes of render.samples_per_frame but at most kConvergenceSamplesPerPass samples in all, so
+//   a pass stays short and sessions rendering meanwhile are never held up for long.
 //   Every mode's shading program is compiled and run once on a small view first, so no mode's
 //   time includes the driver's JIT.
 // - The reference: one more view in "mis", rendered for reference_ms first.
@@ -38,6 +40,10 @@ inline constexpr int kConvergenceMaxMs = 60000;            // per mode
 inline constexpr int kConvergenceMaxReferenceMs = 240000;  // the reference
 inline constexpr int kConvergenceDefaultMs = 2000;
 inline constexpr int kConvergenceCheckpoints = 16;
+// Largest image a comparison renders (each mode has a view of its own: 48 bytes per pixel and
+// G-buffer slice), and the most samples one of its passes takes in all (~16 ms on lavapipe).
+inline constexpr int kConvergenceMaxPixels = 1024 * 1024;
+inline constexpr int kConvergenceSamplesPerPass = 1 << 20;
 
 struct ConvergenceJobSpec {
   Scene scene;  // as given; the job hides the environment and lifts the limits per view
