@@ -2,7 +2,8 @@
 // is ignored by git: dependencies come from npm at build time, never from committed bundles
 // (DESIGN.md section 2). esbuild takes ~100 ms, so `make` and the browser test may run it freely.
 // Code splitting: main.js stays small and starts the session and stream at once; the editor
-// (CodeMirror, most of the bytes) arrives as a chunk through a dynamic import meanwhile.
+// (CodeMirror, most of the bytes) arrives as a chunk through a dynamic import meanwhile, and
+// uPlot (the convergence plot) when its tab is first shown, with its stylesheet as dist/uplot.css.
 import { build } from 'esbuild';
 import { rmSync } from 'node:fs';
 import { dirname, join } from 'node:path';
@@ -12,7 +13,10 @@ const here = dirname(fileURLToPath(import.meta.url));
 
 rmSync(join(here, 'dist'), { recursive: true, force: true });   // no stale chunks
 await build({
-  entryPoints: [join(here, 'src/main.js')],
+  entryPoints: [
+    { in: join(here, 'src/main.js'), out: 'main' },
+    { in: join(here, 'node_modules/uplot/dist/uPlot.min.css'), out: 'uplot' },
+  ],
   outdir: join(here, 'dist'),
   bundle: true,
   format: 'esm',

@@ -25,14 +25,35 @@ int errorCount(const Error& e) { return e.diagnostics.empty() ? 1 : static_cast<
 
 }  // namespace
 
+bool JobManager::Job::over() const {
+  if (isRunner()) return ended;
+  return finished == items.size() || (cancelled && started == finished);
+}
+
+class JobManager::Context : public JobContext {
+ public:
+  Context(JobManager& m, Job& job) : m_(m), job_(job) {}
+  bool cancelled() const override { return job_.cancelFlag.load(); }
+  void setProgress(double fraction) override {
+    std::lock_guard lock(m_.mutex_);
+    job_.progress = std::clamp(fraction, 0.0, 1.0);
+  }
+
+ private:
+  JobManager& m_;
+  Job& job_;
+};
+
 JobManager::JobManager(std::shared_ptr<Renderer> renderer, int workers) : renderer_(std::move(renderer)) {
   for (int i = 0; i < workers; ++i) workers_.emplace_back([this] { workerLoop(); });
+  runnerWorker_ = std::thread([this] { runnerLoop(); });
 }
 
 JobManager::~JobManager() {
   stop();
   for (std::thread& t : workers_)
     if (t.joinable()) t.join();
+  if (runnerWorker_.joinable()) runnerWorker_.join();
 }
 
 void JobManager::stop() {
@@ -40,8 +61,95 @@ void JobManager::stop() {
     std::lock_guard lock(mutex_);
     stopping_ = true;
     queue_.clear();
+    runnerQueue_.clear();
+    for (auto& job : jobs_) job->cancelFlag = true;
   }
   cv_.notify_all();
+  runnerCv_.notify_all();
+}
+
+bool JobManager::makeRoomLocked() {
+  if (jobs_.size() < kMaxJobs) return true;
+  auto it = std::find_if(jobs_.begin(), jobs_.end(), [](const std::shared_ptr<Job>& j) { return j->over(); });
+  if (it == jobs_.end()) return false;
+  jobs_.erase(it);
+  return true;
+}
+
+std::optional<std::string> JobManager::submitRunner(std::string kind, json request, JobRunner run) {
+  auto job = std::make_shared<Job>();
+  job->kind = std::move(kind);
+  job->request = std::move(request);
+  job->runner = std::move(run);
+  {
+    std::lock_guard lock(mutex_);
+    size_t open = 0;
+    for (const auto& j : jobs_) open += j->isRunner() && !j->over();
+    if (open >= kMaxOpenRunnerJobs || !makeRoomLocked()) return std::nullopt;
+    job->id = "job-" + std::to_string(nextId_++);
+    jobs_.push_back(job);
+    if (stopping_) {
+      job->cancelFlag = true;
+      job->ended = true;
+    } else {
+      runnerQueue_.push_back(job);
+    }
+  }
+  runnerCv_.notify_all();
+  return job->id;
+}
+
+bool JobManager::cancel(const std::string& id) {
+  std::lock_guard lock(mutex_);
+  auto it = std::find_if(jobs_.begin(), jobs_.end(), [&](const std::shared_ptr<Job>& j) { return j->id == id; });
+  if (it == jobs_.end()) return false;
+  const std::shared_ptr<Job>& job = *it;
+  if (job->over()) return true;
+  job->cancelled = true;
+  job->cancelFlag = true;
+  if (job->isRunner()) {
+    auto queued = std::find(runnerQueue_.begin(), runnerQueue_.end(), job);
+    if (queued != runnerQueue_.end()) {
+      runnerQueue_.erase(queued);
+      job->ended = true;
+    }
+  } else {
+    queue_.erase(std::remove_if(queue_.begin(), queue_.end(), [&](const Task& t) { return t.job == job; }),
+                 queue_.end());
+  }
+  return true;
+}
+
+void JobManager::runnerLoop() {
+  for (;;) {
+    std::shared_ptr<Job> job;
+    {
+      std::unique_lock lock(mutex_);
+      runnerCv_.wait(lock, [&] { return stopping_ || !runnerQueue_.empty(); });
+      if (stopping_) return;
+      job = std::move(runnerQueue_.front());
+      runnerQueue_.pop_front();
+      job->running = true;
+    }
+    Context context(*this, *job);
+    Result<json> result = makeError(ErrorCode::Internal, "job did not run");
+    try {
+      result = job->runner(context);
+    } catch (const std::exception& e) {
+      result = makeError(ErrorCode::Internal, std::string("job failed: ") + e.what());
+    }
+    std::lock_guard lock(mutex_);
+    job->running = false;
+    job->ended = true;
+    if (job->cancelFlag) {
+      job->cancelled = true;
+    } else if (result) {
+      job->result = std::move(result.value());
+      job->progress = 1;
+    } else {
+      job->error = result.takeError();
+    }
+  }
 }
 
 std::optional<std::string> JobManager::submit(std::vector<JobItem> items) {
@@ -50,12 +158,7 @@ std::optional<std::string> JobManager::submit(std::vector<JobItem> items) {
   job->results.resize(job->items.size());
   {
     std::lock_guard lock(mutex_);
-    if (jobs_.size() >= kMaxJobs) {
-      auto it = std::find_if(jobs_.begin(), jobs_.end(),
-                             [](const std::shared_ptr<Job>& j) { return j->finished == j->items.size(); });
-      if (it == jobs_.end()) return std::nullopt;
-      jobs_.erase(it);
-    }
+    if (!makeRoomLocked()) return std::nullopt;
     job->id = "job-" + std::to_string(nextId_++);
     jobs_.push_back(job);
     if (!stopping_)
@@ -69,12 +172,32 @@ std::optional<json> JobManager::describe(const std::string& id) const {
   std::lock_guard lock(mutex_);
   for (const auto& job : jobs_) {
     if (job->id != id) continue;
+    if (job->isRunner()) {
+      const char* state = job->cancelled ? "cancelled"
+                          : job->result  ? "done"
+                          : job->error   ? "failed"
+                          : job->running ? "running"
+                                         : "queued";
+      json out{{"id", job->id}, {"kind", job->kind}, {"state", state}, {"progress", job->progress},
+               {"request", job->request}};
+      if (job->result) out["result"] = *job->result;
+      if (job->error) {
+        out["error"] = {{"error", errorName(job->error->code)}, {"message", job->error->message}};
+        if (!job->error->field.empty()) out["error"]["field"] = job->error->field;
+        if (!job->error->diagnostics.empty()) out["error"]["diagnostics"] = diagnosticsToJson(job->error->diagnostics);
+      }
+      return out;
+    }
     size_t total = job->items.size();
-    const char* state = job->finished == total ? "done" : job->started == 0 ? "queued" : "running";
+    const char* state = job->finished == total          ? "done"
+                        : job->cancelled && job->over() ? "cancelled"
+                        : job->started == 0             ? "queued"
+                                                        : "running";
     json results = json::array();
     for (const auto& r : job->results)
       if (r) results.push_back(*r);
     return json{{"id", job->id},
+                {"kind", job->kind},
                 {"state", state},
                 {"progress", total == 0 ? 1.0 : static_cast<double>(job->finished) / static_cast<double>(total)},
                 {"total", total},

@@ -1,7 +1,9 @@
-// Batch test jobs over REST: POST /api/jobs/validate queues, GET /api/jobs/{id} reports.
+// Jobs over REST: POST /api/jobs/validate (batch tests) and /api/jobs/convergence (sampling
+// strategies at equal time) queue, GET /api/jobs/{id} reports, DELETE /api/jobs/{id} cancels.
 #include <algorithm>
 #include <set>
 
+#include "brdfa_server/convergence_job.h"
 #include "brdfa_server/http_errors.h"
 #include "routes.h"
 
@@ -70,8 +72,40 @@ void registerJobRoutes(httplib::Server& server, Service& service) {
     sendJson(res, {{"id", *id}, {"total", total}}, 202);
   });
 
+  server.Post("/api/jobs/convergence", [&service](const httplib::Request& req, httplib::Response& res) {
+    auto body = readJsonBody(req, res);
+    if (!body) return;
+    Result<ConvergenceJobSpec> spec = parseConvergenceJob(*body, service.resolver());
+    if (!spec) return sendError(res, spec.error());
+    nlohmann::json request = convergenceJobRequestJson(spec.value());
+    std::shared_ptr<Renderer> renderer = service.renderer;
+    auto run = [renderer, spec = std::move(spec.value())](JobContext& context) {
+      return runConvergenceJob(*renderer, spec, context);
+    };
+    std::optional<std::string> id = service.jobs->submitRunner("convergence", request, std::move(run));
+    if (!id)
+      return sendError(res, 429, "too_many_jobs",
+                       "at most " + std::to_string(kMaxOpenRunnerJobs) +
+                           " convergence jobs wait or run at once (and " + std::to_string(kMaxJobs) +
+                           " jobs are kept); try later or cancel one");
+    request.erase("scene");
+    request["id"] = *id;
+    request["kind"] = "convergence";
+    sendJson(res, request, 202);
+  });
+
   server.Get("/api/jobs/([^/]+)", [&service](const httplib::Request& req, httplib::Response& res) {
     std::string id = req.matches[1];
+    auto job = service.jobs->describe(id);
+    if (!job) return sendError(res, 404, "not_found", "no job '" + id + "'", "id");
+    sendJson(res, *job);
+  });
+
+  // Cancels a queued or running job and answers it ("cancelled"; a running convergence job
+  // stops after its current pass, a BRDF being tested finishes first). A finished job is left as is.
+  server.Delete("/api/jobs/([^/]+)", [&service](const httplib::Request& req, httplib::Response& res) {
+    std::string id = req.matches[1];
+    if (!service.jobs->cancel(id)) return sendError(res, 404, "not_found", "no job '" + id + "'", "id");
     auto job = service.jobs->describe(id);
     if (!job) return sendError(res, 404, "not_found", "no job '" + id + "'", "id");
     sendJson(res, *job);

@@ -4,6 +4,8 @@
 #include <string_view>
 
 #include "brdfa/image_codec.h"
+#include "brdfa_server/convergence.h"
+#include "brdfa_server/http_body.h"
 #include "brdfa_server/http_errors.h"
 #include "brdfa_server/request_body.h"
 #include "routes.h"
@@ -14,7 +16,11 @@ namespace {
 
 using namespace std::chrono_literals;
 
-nlohmann::json statsToJson(const FrameStats& s, const std::optional<Error>& renderError) {
+nlohmann::json targetErrorJson(const RenderSettings& render) {
+  return render.targetError > 0 ? nlohmann::json(render.targetError) : nlohmann::json(nullptr);
+}
+
+nlohmann::json statsToJson(const FrameStats& s, const std::optional<Error>& renderError, const RenderSettings& render) {
   nlohmann::json out{{"spp", s.spp},
                      {"elapsed_ms", s.elapsedMs},
                      {"ms_per_frame", s.lastPassMs},
@@ -26,7 +32,16 @@ nlohmann::json statsToJson(const FrameStats& s, const std::optional<Error>& rend
                      {"rel_error", nullptr},
                      {"nan_samples", s.nanSamples},
                      {"passes", s.passes},
+                     // rel_error <= render.target_error (only with a target, from kMinSppForTarget spp).
                      {"converged", s.converged},
+                     {"max_samples_reached", s.maxSamplesReached},
+                     {"done", s.done()},  // either: no more passes run until the scene changes
+                     {"target_error", targetErrorJson(render)},
+                     {"sampling", samplingModeName(render.sampling)},
+                     {"estimator", s.estimator},
+                     {"warnings", s.warnings},
+                     {"rel_error_spp", s.relErrorSpp},
+                     {"rel_error_elapsed_ms", s.relErrorElapsedMs},
                      {"scene_version", s.sceneVersion}};
   if (s.relError && std::isfinite(*s.relError)) out["rel_error"] = *s.relError;
   if (renderError) out["error"] = {{"error", errorName(renderError->code)}, {"message", renderError->message}};
@@ -74,6 +89,59 @@ std::optional<uint64_t> parseMinSpp(const std::string& text) {
   return v;
 }
 
+// ?target=X for /convergence: a relative error in (0, 1), like render.target_error.
+std::optional<double> parseTargetError(const std::string& text) {
+  if (text.empty() || text.size() > 40) return std::nullopt;
+  double v = 0;
+  auto [ptr, ec] = std::from_chars(text.data(), text.data() + text.size(), v);
+  if (ec != std::errc() || ptr != text.data() + text.size() || !std::isfinite(v) || v <= 0 || v >= 1)
+    return std::nullopt;
+  return v;
+}
+
+// A number as the JSON answer writes it (shortest form that reads back the same double), so
+// the CSV and the JSON carry identical values.
+std::string csvNumber(double v) { return nlohmann::json(v).dump(); }
+
+std::string convergenceCsv(const std::vector<ConvergencePoint>& points) {
+  std::string out = "elapsed_ms,spp,rel_error,passes\n";
+  for (const ConvergencePoint& p : points)
+    out += csvNumber(p.elapsedMs) + "," + std::to_string(p.spp) + "," + csvNumber(p.relError) + "," +
+           std::to_string(p.passes) + "\n";
+  return out;
+}
+
+nlohmann::json convergenceJson(const Session::Convergence& c, std::optional<double> target, size_t maxPoints) {
+  nlohmann::json points = nlohmann::json::array();
+  for (const ConvergencePoint& p : thinLogTime(c.points, maxPoints))
+    points.push_back({{"elapsed_ms", p.elapsedMs}, {"spp", p.spp}, {"rel_error", p.relError}, {"passes", p.passes}});
+  nlohmann::json out{{"points", std::move(points)},
+                     {"fit", nullptr},
+                     {"target_error", target ? nlohmann::json(*target) : nlohmann::json(nullptr)},
+                     {"predicted_ms", nullptr},
+                     {"sampling", samplingModeName(c.render.sampling)},
+                     {"estimator", c.stats.estimator},
+                     {"warnings", c.stats.warnings},
+                     {"spp", c.stats.spp},
+                     {"passes", c.stats.passes},
+                     {"elapsed_ms", c.stats.elapsedMs},
+                     {"converged", c.stats.converged},
+                     {"max_samples_reached", c.stats.maxSamplesReached},
+                     {"done", c.stats.done()},
+                     {"scene_version", c.stats.sceneVersion},
+                     {"max_points", ConvergenceSeries::kMaxPoints}};
+  // The fit always uses the whole series, whatever max_points thinned the answer to.
+  if (std::optional<LogLogFit> fit = fitLogLog(c.points, c.firstPassMs)) {
+    out["fit"] = {{"slope", fit->slope},
+                  {"intercept", fit->intercept},
+                  {"points_used", fit->pointsUsed},
+                  {"time_offset_ms", fit->offsetMs}};
+    if (target)
+      if (std::optional<double> ms = predictMs(*fit, *target)) out["predicted_ms"] = *ms;
+  }
+  return out;
+}
+
 struct StreamState {
   uint64_t lastSeq = 0;
   bool opened = false;  // the first part's boundary and headers were sent
@@ -118,7 +186,9 @@ bool writeNextPart(Service& service, Session& session, StreamState& state, httpl
 }
 
 nlohmann::json sessionSummary(Session& s) {
-  return {{"id", s.id()}, {"stats", statsToJson(s.stats(), s.renderError())}, {"stream_clients", s.streamClients()}};
+  return {{"id", s.id()},
+          {"stats", statsToJson(s.stats(), s.renderError(), s.renderSettings())},
+          {"stream_clients", s.streamClients()}};
 }
 
 }  // namespace
@@ -213,7 +283,39 @@ void registerSessionRoutes(httplib::Server& server, Service& service) {
     auto session = sessionOr404(service, req, res);
     if (!session) return;
     session->touch();  // a client polling stats is watching
-    sendJson(res, statsToJson(session->stats(), session->renderError()));
+    sendJson(res, statsToJson(session->stats(), session->renderError(), session->renderSettings()));
+  });
+
+  // Error against render time since the last accumulation restart (convergence.h): JSON with
+  // the log-log fit, or ?format=csv. ?target=X predicts when rel_error reaches X (default: the
+  // scene's render.target_error); ?max_points=N thins the answer evenly in log-time.
+  server.Get("/api/sessions/([^/]+)/convergence", [&service](const httplib::Request& req, httplib::Response& res) {
+    const std::string format = req.has_param("format") ? req.get_param_value("format") : "json";
+    if (format != "json" && format != "csv")
+      return sendError(res, 400, "invalid_argument", "format must be json or csv", "format");
+    std::optional<double> target;
+    if (req.has_param("target")) {
+      target = parseTargetError(req.get_param_value("target"));
+      if (!target) return sendError(res, 400, "invalid_argument", "target must be a number in (0, 1)", "target");
+    }
+    size_t maxPoints = ConvergenceSeries::kMaxPoints;
+    if (req.has_param("max_points")) {
+      auto parsed = parseMinSpp(req.get_param_value("max_points"));
+      if (!parsed || *parsed < 2 || *parsed > ConvergenceSeries::kMaxPoints)
+        return sendError(res, 400, "invalid_argument",
+                         "max_points must be an integer in [2, " + std::to_string(ConvergenceSeries::kMaxPoints) + "]",
+                         "max_points");
+      maxPoints = static_cast<size_t>(*parsed);
+    }
+    auto session = sessionOr404(service, req, res);
+    if (!session) return;
+    session->touch();  // a client following the curve is watching
+    if (!requireScene(*session, res)) return;
+    Session::Convergence c = session->convergence();
+    if (!target && c.render.targetError > 0) target = c.render.targetError;
+    res.set_header("Cache-Control", "no-store");
+    if (format == "csv") return sendBody(res, convergenceCsv(thinLogTime(c.points, maxPoints)), "text/csv");
+    sendJson(res, convergenceJson(c, target, maxPoints));
   });
 
   server.Get("/api/sessions/([^/]+)/frame", [&service](const httplib::Request& req, httplib::Response& res) {

@@ -300,7 +300,8 @@ Result<SceneObject> parseObject(const json& j, const std::string& prefix, const 
 
 Result<void> parseRender(const json& j, RenderSettings& rs) {
   BRDFA_CHECK(checkObject(j, "render"));
-  BRDFA_CHECK(checkKeys(j, "render", {"width", "height", "samples_per_frame", "max_samples", "sampling", "exposure", "tonemap"}));
+  BRDFA_CHECK(checkKeys(j, "render", {"width", "height", "samples_per_frame", "max_samples", "sampling", "target_error",
+                                      "exposure", "tonemap"}));
   auto intIn = [](long long lo, long long hi) {
     return [lo, hi](const json& v, const std::string& f) { return readInt(v, f, lo, hi); };
   };
@@ -312,7 +313,16 @@ Result<void> parseRender(const json& j, RenderSettings& rs) {
     Result<std::string> s = readString(*it, "render.sampling");
     if (!s) return s.takeError();
     if (!samplingModeFromName(s.value(), rs.sampling))
-      return invalid("render.sampling", "must be \"cosine\", \"uniform\" or \"brdf\", got \"" + s.value() + "\"");
+      return invalid("render.sampling", std::string("must be ") + kSamplingChoices + ", got \"" + s.value() + "\"");
+  }
+  // A relative RMS error to stop at: a number in (0, 1), or null (none; the default).
+  if (auto it = j.find("target_error"); it != j.end() && !it->is_null()) {
+    if (!it->is_number())
+      return invalid("render.target_error", std::string("expected a number in (0, 1) or null, got ") + typeName(*it));
+    const double t = it->get<double>();
+    if (!std::isfinite(t) || t <= 0 || t >= 1)
+      return invalid("render.target_error", "must be in (0, 1) or null, got " + it->dump());
+    rs.targetError = t;
   }
   BRDFA_CHECK(optionalField(j, "exposure", "render", rs.exposure,
                             [](const json& v, const std::string& f) { return readFloat(v, f, -40, 40); }));
@@ -397,6 +407,7 @@ json sceneToJson(const Scene& s) {
         {"samples_per_frame", s.render.samplesPerFrame},
         {"max_samples", s.render.maxSamples},
         {"sampling", samplingModeName(s.render.sampling)},
+        {"target_error", s.render.targetError > 0 ? json(s.render.targetError) : json(nullptr)},
         {"exposure", floatForJson(s.render.exposure)},
         {"tonemap", toneMapName(s.render.toneMap)}}},
   };

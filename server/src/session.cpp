@@ -103,7 +103,9 @@ Result<void> Session::applyScene(std::unique_lock<std::mutex>& updateLock, const
     lastActive_ = Clock::now();
     sceneJson_ = std::move(sceneJson);
     maxSamples_ = scene.render.maxSamples;
+    render_ = scene.render;
     stats_ = fresh;
+    convergence_.observe(fresh);
     renderError_.reset();
     publishRequested_ = true;
     // The old scene's frame must not reach a stream client that connects now; seq is kept so
@@ -146,6 +148,26 @@ FrameStats Session::stats() const {
   return stats_;
 }
 
+RenderSettings Session::renderSettings() const {
+  std::lock_guard lock(mutex_);
+  return render_;
+}
+
+Session::Convergence Session::convergence() const {
+  std::lock_guard lock(mutex_);
+  return Convergence{convergence_.points(), convergence_.firstPassMs(), stats_, render_};
+}
+
+void Session::noteStatsLocked(const FrameStats& s, bool fromPass) {
+  // A pass or read of a scene that was replaced meanwhile must not overwrite the new scene's
+  // stats. A frame read returns the view's stats with rel_error measured afresh (the renderer
+  // refreshes it on every read); it never runs a pass, so its spp is never behind a pass's.
+  if (s.sceneVersion < stats_.sceneVersion) return;
+  if (!fromPass && s.sceneVersion == stats_.sceneVersion && s.spp < stats_.spp) return;
+  stats_ = s;
+  convergence_.observe(s);
+}
+
 std::optional<Error> Session::renderError() const {
   std::lock_guard lock(mutex_);
   return renderError_;
@@ -181,6 +203,10 @@ Result<Session::EncodedFrame> Session::waitAndEncodeFrame(uint64_t minSpp, std::
   Result<Frame> frame = view_->readFrame(pfm);
   if (!frame) return frame.takeError();
   const Frame& f = frame.value();
+  {
+    std::lock_guard lock(mutex_);
+    noteStatsLocked(f.stats, false);
+  }
   EncodedFrame out;
   out.bytes = pfm ? encodePfm(f.rgba32f.data(), f.width, f.height) : encodePng(f.rgba8.data(), f.width, f.height);
   out.stats = f.stats;
@@ -191,7 +217,7 @@ void Session::addStreamClient() {
   {
     std::lock_guard lock(mutex_);
     ++streamClients_;
-    publishRequested_ = true;  // a new client of a converged session still gets a frame
+    publishRequested_ = true;  // a new client of a finished session still gets a frame
   }
   wake_.notify_all();
 }
@@ -249,6 +275,7 @@ void Session::publishFrame(std::unique_lock<std::mutex>& lock) {
     return;
   }
   Frame& f = frame.value();
+  noteStatsLocked(f.stats, false);
   if (f.width <= 0 || f.height <= 0 || f.rgba8.size() < static_cast<size_t>(f.width) * f.height * 4) return;
   pendingRaw_ = RawFrame{std::move(f.rgba8), f.width, f.height, f.stats.spp, f.stats.sceneVersion, f.stats.done()};
   encodeWake_.notify_one();
@@ -258,8 +285,8 @@ std::vector<uint8_t> Session::encodeStreamPng(const RawFrame& raw) {
   // A stream part's headers go out before its frame exists (see the stream route), so the
   // sample count travels inside the PNG.
   const std::vector<std::pair<std::string, std::string>> text{{kSamplesPngKeyword, std::to_string(raw.spp)}};
-  // The converged frame is always full size, however few samples max_samples allows.
-  if (!raw.converged && raw.spp < kPreviewBelowSpp && raw.width * raw.height >= kPreviewMinPixels) {
+  // The final frame is always full size, however few samples max_samples allows.
+  if (!raw.done && raw.spp < kPreviewBelowSpp && raw.width * raw.height >= kPreviewMinPixels) {
     int w = 0, h = 0;
     std::vector<uint8_t> half = halveRgba8(raw.rgba8.data(), raw.width, raw.height, w, h);
     if (!half.empty()) return encodePng(half.data(), w, h, text);
@@ -319,8 +346,7 @@ void Session::renderLoop() {
         frames_.notify_all();
         continue;
       }
-      // A pass of a scene that was replaced meanwhile must not overwrite the new scene's stats.
-      if (pass.value().sceneVersion >= stats_.sceneVersion) stats_ = pass.value();
+      noteStatsLocked(pass.value(), true);
       progress_.notify_all();
       bool due = publishRequested_ || stats_.done() || Clock::now() - lastPublish_ >= kPublishInterval;
       if (streamClients_ > 0 && stats_.spp > 0 && due) publishFrame(lock);

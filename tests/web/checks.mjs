@@ -47,9 +47,9 @@ async function capSamples(env, sid) {
   await http(env, 'PATCH', `/api/sessions/${sid}/scene`, { render: { max_samples: 16 } });
 }
 
-/** Waits until the session converged and the frame on screen is its final one. */
+/** Waits until the session is done (max_samples reached) and the frame on screen is its final one. */
 async function settle(env, page, sid) {
-  await until('convergence', async () => (await http(env, 'GET', `/api/sessions/${sid}/stats`)).converged);
+  await until('rendering done', async () => (await http(env, 'GET', `/api/sessions/${sid}/stats`)).done);
   let prev = await env.grab(page);
   return until('a stable frame', async () => {
     await sleep(150);
@@ -463,6 +463,51 @@ export const checks = [
     await until('the stream to reconnect', async () => (await http(env, 'GET', `/api/sessions/${sid}`)).stream_clients >= 1);
     await until('stats polled again', async () => (await polls()) > n0);
     await capSamples(env, sid);
+  }],
+
+  ['the convergence plot grows while rendering; sampling and target error in the render settings', async (env) => {
+    const { page, sid } = env;
+    const stats = () => http(env, 'GET', `/api/sessions/${sid}/stats`);
+    const scene = () => http(env, 'GET', `/api/sessions/${sid}/scene`);
+    await http(env, 'PATCH', `/api/sessions/${sid}/scene`, { render: { max_samples: 1048576 } });   // keeps rendering
+    await page.click('.tabs [data-tab="tab-convergence"]');
+    const count = () => page.evaluate(() => Number(document.querySelector('#convergence .conv-plot').dataset.points || 0));
+    const n1 = await until('points on the plot', async () => { const n = await count(); return n >= 3 && n; });
+    await until('more points on the plot', async () => (await count()) > n1);
+    await page.locator('#convergence .conv-plot canvas').first().waitFor();
+    await until('the fitted slope', async () => /slope -\d/.test(await page.locator('#convergence .conv-fit').textContent()));
+    await shot(env, page, '13-convergence');
+
+    // The sampling selector PATCHes render.sampling: the accumulation and the stream restart.
+    await page.click('.tabs [data-tab="tab-objects"]');
+    assert.equal(await page.inputValue('#objects .r-sampling'), 'mis', 'the default mode is shown');
+    const before = await until('some samples', async () => { const s = await stats(); return s.spp >= 100 && s.spp; });
+    await page.selectOption('#objects .r-sampling', 'uniform');
+    await until('the scene to sample uniformly', async () => (await scene()).render.sampling === 'uniform');
+    const overlaySpp = async () => Number((/^(\d+) spp/.exec(await page.locator('#viewer .overlay').textContent()) || [])[1] ?? NaN);
+    await until('the view to restart from few samples', async () => (await overlaySpp()) < before);
+    await page.selectOption('#objects .r-sampling', 'mis');
+    await until('back to mis', async () => (await scene()).render.sampling === 'mis');
+
+    // A target error (in percent) stops rendering once reached; the overlay says so.
+    await page.fill('#objects .r-target', '90');
+    await page.press('#objects .r-target', 'Enter');
+    await until('target_error 0.9 in the scene', async () => (await scene()).render.target_error === 0.9);
+    await until('converged', async () => (await stats()).converged);
+    await until('the overlay to say so', async () => /err [\d.]+%.*converged/.test(await page.locator('#viewer .overlay').textContent()));
+    await page.fill('#objects .r-target', '');
+    await page.press('#objects .r-target', 'Enter');
+    await until('no target', async () => (await scene()).render.target_error === null);
+
+    // The strategy comparison runs as a job and lists each mode.
+    await page.click('.tabs [data-tab="tab-convergence"]');
+    await page.fill('#convergence .cmp-time', '100');
+    await page.click('#convergence .cmp-run');
+    await until('a row per mode', async () => (await page.locator('#convergence .cmp-results tbody tr').count()) === 4, 60000);
+    assert.equal(await page.locator('#convergence .cmp-status').textContent(), 'done');
+    await shot(env, page, '14-strategies');
+    await capSamples(env, sid);
+    await page.click('.tabs [data-tab="tab-editor"]');
   }],
 
   ['no console errors', async (env) => {

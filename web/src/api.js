@@ -51,6 +51,9 @@ export const deletePreset = (brdf, preset) => request('DELETE', `/api/brdfs/${se
 export const startValidateJob = (names) =>
   request('POST', '/api/jobs/validate', { json: names === 'all' ? { all: true } : { names } });
 export const getJob = (id) => request('GET', `/api/jobs/${seg(id)}`);
+/** Sampling strategies at equal time: {scene, modes?, time_ms?, reference_ms?} -> 202 {id, ...}. */
+export const startConvergenceJob = (body) => request('POST', '/api/jobs/convergence', { json: body });
+export const cancelJob = (id) => request('DELETE', `/api/jobs/${seg(id)}`);
 
 // Assets: meshes, textures, environments (built-ins and uploads).
 export const listAssets = (kind) => request('GET', kind ? `/api/assets?kind=${seg(kind)}` : '/api/assets');
@@ -71,6 +74,9 @@ export const getScene = (session) => request('GET', `/api/sessions/${seg(session
 /** RFC 7386 merge patch; arrays (objects) are replaced whole. Answers the full scene. */
 export const patchScene = (session, patch) => request('PATCH', `/api/sessions/${seg(session)}/scene`, { json: patch });
 export const getStats = (session) => request('GET', `/api/sessions/${seg(session)}/stats`);
+/** rel_error against render time since the last restart, with the log-log fit (docs/api.md). */
+export const getConvergence = (session, maxPoints = 400) =>
+  request('GET', `/api/sessions/${seg(session)}/convergence?max_points=${maxPoints}`);
 
 /** URL for an <img>: multipart/x-mixed-replace PNG stream. `nonce` forces a reconnect. */
 export const streamUrl = (session, nonce = 0) => `/api/sessions/${seg(session)}/stream?n=${nonce}`;

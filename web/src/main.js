@@ -9,6 +9,8 @@ import { mountCamera } from './panels/camera.js';
 import { mountLog } from './panels/log.js';
 import { mountParams } from './panels/params.js';
 import { startStatsPolling } from './stats.js';
+import { startConvergencePolling } from './convergence.js';
+import { mountConvergence } from './panels/convergence.js';
 import { mountTabs } from './panels/tabs.js';
 import { mountTests } from './panels/tests.js';
 import { mountFrameSaver } from './panels/frame-saver.js';
@@ -31,6 +33,7 @@ mountTests($('tests'));
 mountFrameSaver($('frame-saver'));
 mountObjects($('objects'));
 mountEnvironment($('environment'));
+mountConvergence($('convergence'));
 const firstFrame = new Promise((resolve) => { on('firstFrame', resolve); setTimeout(resolve, 1500); });
 const editor = firstFrame.then(() => import('./panels/editor.js')).then((m) => m.mountEditor($('editor'), $('library')));
 
@@ -38,6 +41,7 @@ const editor = firstFrame.then(() => import('./panels/editor.js')).then((m) => m
   try {
     await startSession();
     startStatsPolling();
+    startConvergencePolling();
     const name = state.scene.objects?.[0]?.brdf;
     if (!name) { set({ status: 'the scene has no object' }); return; }
     refreshLibrary();

@@ -5,6 +5,7 @@ export const state = {
   session: null,      // this tab's session id (never 'default')
   scene: null,        // the session's full scene JSON, as the server last answered it
   stats: null,        // latest GET /stats reply
+  convergence: null,  // latest GET /convergence reply (+ session), while the Convergence tab is shown
   health: null,       // GET /api/health reply (device name)
   selected: 0,        // the object the editor and the Parameters panel work on (Objects tab)
   brdf: null,         // the BRDF objects[selected] uses: {name, params:[{name,type,min,max,default}]}

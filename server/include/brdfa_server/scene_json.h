@@ -29,6 +29,8 @@ struct SceneResolver {
 inline constexpr const char* kDefaultMesh = "sphere";
 inline constexpr const char* kDefaultBrdf = "lambert";  // also the one object of a scene without "objects"
 inline constexpr const char* kInlineBrdfName = "inline";
+// render.sampling's names, for error messages (brdfa::samplingModeFromName accepts them).
+inline constexpr const char* kSamplingChoices = "\"cosine\", \"uniform\", \"brdf\", \"environment\" or \"mis\"";
 
 // Parses and validates. Every object's params are filled in completely (explicit value or the
 // BRDF's default), so sceneToJson(sceneFromJson(j)) lists them all and parses back to an equal

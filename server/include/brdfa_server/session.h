@@ -1,8 +1,9 @@
 // An interactive session: one RenderView, its scene (as JSON and as brdfa::Scene), a render
-// thread that runs progressive passes only while the scene is unconverged and somebody watches
+// thread that runs progressive passes only while the scene is not done (FrameStats::done():
+// converged to render.target_error, or max_samples reached) and somebody watches
 // (a stream client, a frame waiter, or a frame/stats request within the idle timeout), and an
 // encoder thread that turns frames read back for stream clients into PNGs. Otherwise both
-// sleep on condition variables, so a converged or unwatched session costs no CPU.
+// sleep on condition variables, so a finished or unwatched session costs no CPU.
 #pragma once
 
 #include <atomic>
@@ -20,6 +21,7 @@
 #include <vector>
 
 #include "brdfa/renderer.h"
+#include "brdfa_server/convergence.h"
 
 namespace brdfa::server {
 
@@ -69,11 +71,23 @@ class Session {
   // How long nobody has used the session: 0 while a stream or a frame wait is open, else the
   // time since its creation, its last scene change or its last touch(), whichever is latest.
   std::chrono::milliseconds inactiveFor(Clock::time_point now) const;
-  FrameStats stats() const;  // as of the latest pass; never blocks on the device
+  FrameStats stats() const;  // as of the latest pass or frame read; never blocks on the device
+  RenderSettings renderSettings() const;  // of the scene in place (target_error, sampling)
+
+  // The error-against-time series since the last accumulation restart (see convergence.h),
+  // with the stats and render settings of the same moment.
+  struct Convergence {
+    std::vector<ConvergencePoint> points;
+    double firstPassMs = 0;  // ConvergenceSeries::firstPassMs
+    FrameStats stats;
+    RenderSettings render;
+  };
+  Convergence convergence() const;
   std::optional<Error> renderError() const;
 
   enum class WaitOutcome { Reached, TimedOut, Stopped, Failed };
-  // Waits until spp >= min(minSpp, max_samples), the scene converged, rendering failed, the
+  // Waits until spp >= min(minSpp, max_samples), rendering is done (converged to
+  // render.target_error, or max_samples reached: FrameStats::done()), rendering failed, the
   // session stopped, or `timeout` passed (counting as a watcher meanwhile), then reads the frame
   // without letting the render thread start another pass in between: the pass that satisfied
   // the wait is the one whose frame is read. `outcome` tells how the wait ended; on Stopped no
@@ -104,7 +118,7 @@ class Session {
   static constexpr std::chrono::milliseconds kPublishInterval{33};
   // Stream frames with fewer samples than this (the first passes after a change: 1, then 3)
   // are sent at half resolution when the frame has at least kPreviewMinPixels and is not the
-  // converged one: they are mostly noise, and the full-size PNG of noise is what costs the most
+  // final (done) one: they are mostly noise, and the full-size PNG of noise is what costs the most
   // to encode, send and decode. A progressive preview, as in Cycles' viewport; the <img> scales
   // it to the view. /frame always answers full size.
   static constexpr uint64_t kPreviewBelowSpp = 4;
@@ -118,6 +132,9 @@ class Session {
   void guarded(void (Session::*loop)());
   bool watchedLocked(Clock::time_point now) const;
   void publishFrame(std::unique_lock<std::mutex>& lock);
+  // Takes the stats of a pass or a frame read of the scene in place (older scenes' are dropped)
+  // and feeds the convergence series. Under mutex_.
+  void noteStatsLocked(const FrameStats& stats, bool fromPass);
   // Runs a view call from a request thread. The view serializes calls with a plain mutex,
   // which is not fair: a render thread that starts the next pass right after the last would
   // starve readFrame/setScene. The render thread holds off while such calls are pending.
@@ -141,7 +158,9 @@ class Session {
   bool hasScene_ = false;
   nlohmann::json sceneJson_;
   int maxSamples_ = 0;
+  RenderSettings render_;
   FrameStats stats_;
+  ConvergenceSeries convergence_;
   std::optional<Error> renderError_;
   Clock::time_point watchedUntil_{};
   Clock::time_point lastActive_ = Clock::now();  // creation, scene change or touch()
@@ -158,7 +177,7 @@ class Session {
     std::vector<uint8_t> rgba8;
     int width = 0, height = 0;
     uint64_t spp = 0, sceneVersion = 0;
-    bool converged = false;
+    bool done = false;  // the final frame (FrameStats::done())
   };
   // The stream PNG of `raw`: a half-size preview below kPreviewBelowSpp, its spp in a tEXt chunk.
   static std::vector<uint8_t> encodeStreamPng(const RawFrame& raw);

@@ -1,6 +1,6 @@
 // Log panel: device and render numbers (the thesis engine's ImGui log window).
 import { on } from '../state.js';
-import { pct, fixed } from '../format.js';
+import { errPct, fixed } from '../format.js';
 
 export function mountLog(el) {
   const field = (name) => el.querySelector(`[data-k="${name}"]`);
@@ -14,7 +14,9 @@ export function mountLog(el) {
     field('ms').textContent = fixed(stats.ms_per_frame);
     field('vertices').textContent = String(stats.vertices);
     field('spp').textContent = String(stats.spp);
-    field('err').textContent = pct(stats.rel_error);
+    field('err').textContent = errPct(stats.rel_error);
+    field('estimator').textContent = stats.estimator || stats.sampling || '';
+    field('estimator').title = (stats.warnings || []).join('\n');
     field('nan').textContent = String(stats.nan_samples);
     field('error').textContent = stats.error ? `${stats.error.error}: ${stats.error.message}` : '';
   });

@@ -1,6 +1,6 @@
 // Objects (the object editor): add and remove objects (at least one stays), choose or upload a
 // mesh and up to four textures, choose the BRDF, translate/rotate/scale; and the scene-wide
-// samples per frame and maximum samples. Every change PATCHes the whole `objects` array (a
+// samples per frame, maximum samples, sampling mode and target error. Every change PATCHes the whole `objects` array (a
 // merge patch replaces arrays) or `render`; the server answers the full scene.
 // The object chosen here (state.selected) is the one the editor and the Parameters panel edit.
 import * as api from '../api.js';
@@ -87,6 +87,10 @@ export function mountObjects(el) {
     }
     if (!focused($('.r-spf'))) $('.r-spf').value = scene.render.samples_per_frame;
     if (!focused($('.r-max'))) $('.r-max').value = scene.render.max_samples;
+    if (!focused($('.r-sampling'))) $('.r-sampling').value = scene.render.sampling;
+    // Shown in percent; the scene holds a fraction (null: none).
+    const t = scene.render.target_error;
+    if (!focused($('.r-target'))) $('.r-target').value = t == null ? '' : Number((t * 100).toPrecision(6));
   }
   // Rebuilt only while its tab is shown: a camera drag answers a scene many times a second.
   const shown = () => !el.closest('.tab-page')?.hidden;
@@ -161,6 +165,13 @@ export function mountObjects(el) {
   });
   renderField('.r-spf', 'samples_per_frame');
   renderField('.r-max', 'max_samples');
+  $('.r-sampling').addEventListener('change', (ev) => send({ render: { sampling: ev.target.value } }));
+  $('.r-target').addEventListener('change', (ev) => {
+    const text = ev.target.value.trim();
+    const v = Number(text);
+    if (text === '' || v === 0) send({ render: { target_error: null } });
+    else if (Number.isFinite(v) && v > 0 && v < 100) send({ render: { target_error: v / 100 } });
+  });
 
   async function upload(input, kind, apply) {
     const file = input.files?.[0];

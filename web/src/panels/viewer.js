@@ -2,7 +2,7 @@
 // elapsed time, relative error and frames per second overlaid.
 import * as api from '../api.js';
 import { state, set, on } from '../state.js';
-import { pct, fixed, seconds } from '../format.js';
+import { errPct, fixed, seconds } from '../format.js';
 
 export function mountViewer(el) {
   const img = el.querySelector('img');
@@ -41,7 +41,10 @@ export function mountViewer(el) {
 
   on('stats', ({ stats }) => {
     if (!stats) return;
-    overlay.textContent = `${stats.spp} spp · ${seconds(stats.elapsed_ms)} · err ${pct(stats.rel_error)} · ` +
-      `${fixed(stats.fps)} fps${stats.converged ? ' · converged' : ''}`;
+    // converged: rel_error reached render.target_error; max spp: render.max_samples reached.
+    const end = stats.converged ? ' · converged' : stats.max_samples_reached ? ' · max spp' : '';
+    const target = stats.target_error != null ? ` (target ${errPct(stats.target_error)})` : '';
+    overlay.textContent = `${stats.spp} spp · ${seconds(stats.elapsed_ms)} · err ${errPct(stats.rel_error)}${target} · ` +
+      `${fixed(stats.fps)} fps${end}`;
   });
 }
