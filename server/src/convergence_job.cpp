@@ -159,13 +159,16 @@ Result<json> runConvergenceJob(Renderer& renderer, const ConvergenceJobSpec& spe
     }
   }
 
-  // The shared reference, in "mis".
+  // The shared reference, in "mis", with a seed of its own: the "mis" run below must share no
+  // sample with it, or its error against the reference would read too small.
   Frame reference;
   {
     Result<std::unique_ptr<RenderView>> view = renderer.createView();
     if (!view) return view.takeError();
     RenderView& v = *view.value();
-    if (Result<void> set = v.setScene(sceneFor(SamplingMode::Mis)); !set) return set.takeError();
+    Scene referenceScene = sceneFor(SamplingMode::Mis);
+    referenceScene.render.seed ^= 0x9e3779b9u;
+    if (Result<void> set = v.setScene(referenceScene); !set) return set.takeError();
     for (;;) {
       if (context.cancelled()) return cancelledError();
       Result<FrameStats> pass = v.renderPass();

@@ -301,7 +301,7 @@ Result<SceneObject> parseObject(const json& j, const std::string& prefix, const 
 Result<void> parseRender(const json& j, RenderSettings& rs) {
   BRDFA_CHECK(checkObject(j, "render"));
   BRDFA_CHECK(checkKeys(j, "render", {"width", "height", "samples_per_frame", "max_samples", "sampling", "target_error",
-                                      "exposure", "tonemap"}));
+                                      "seed", "exposure", "tonemap"}));
   auto intIn = [](long long lo, long long hi) {
     return [lo, hi](const json& v, const std::string& f) { return readInt(v, f, lo, hi); };
   };
@@ -323,6 +323,12 @@ Result<void> parseRender(const json& j, RenderSettings& rs) {
     if (!std::isfinite(t) || t <= 0 || t >= 1)
       return invalid("render.target_error", "must be in (0, 1) or null, got " + it->dump());
     rs.targetError = t;
+  }
+  // Independent replicates of one scene (renderer scene.h): an integer in [0, 2^31).
+  if (auto it = j.find("seed"); it != j.end()) {
+    Result<int> seed = readInt(*it, "render.seed", 0, 2147483647LL);
+    if (!seed) return seed.takeError();
+    rs.seed = static_cast<uint32_t>(seed.value());
   }
   BRDFA_CHECK(optionalField(j, "exposure", "render", rs.exposure,
                             [](const json& v, const std::string& f) { return readFloat(v, f, -40, 40); }));
@@ -408,6 +414,7 @@ json sceneToJson(const Scene& s) {
         {"max_samples", s.render.maxSamples},
         {"sampling", samplingModeName(s.render.sampling)},
         {"target_error", s.render.targetError > 0 ? json(s.render.targetError) : json(nullptr)},
+        {"seed", s.render.seed},
         {"exposure", floatForJson(s.render.exposure)},
         {"tonemap", toneMapName(s.render.toneMap)}}},
   };

@@ -49,10 +49,12 @@ float brdfa_misEnvironmentFraction(vec3 V, vec3 N, vec3 X, vec3 Y) {
   float lobe = brdfa_brdfSidePdf(R, V, N, X, Y);
   // guard: a user's pdfBRDF may return NaN, Inf or a negative value here; the fraction must
   // stay a number (NaN fails every comparison, so it takes the diffuse value).
-  lobe = lobe >= 0.0 ? min(lobe, 1e30) : 1.0 / BRDFA_PI;
+  // guard: both are squared below; 1e15^2 still fits a float.
+  lobe = lobe >= 0.0 ? min(lobe, 1e15) : 1.0 / BRDFA_PI;
   float narrow = lobe / (lobe + 1.0);
-  float env = mix(brdfa_environmentConcentration(), brdfa_environmentPdf(R), narrow);
-  return env / (env + lobe);
+  float env = min(mix(brdfa_environmentConcentration(), brdfa_environmentPdf(R), narrow), 1e15);
+  // Squared, like the power heuristic: a side clearly more concentrated takes nearly all.
+  return env * env / (env * env + lobe * lobe);
 }
 #endif
 
