@@ -202,8 +202,9 @@ TEST_F(Estimators, FurnaceStaysExactWithCosineAndMisIsTheBrdfSideThere) {
       ASSERT_NEAR(px[0], 1.0f, 1e-5f) << samplingModeName(mode) << " pixel " << i;
     }
     EXPECT_GT(covered, 500);
-    if (mode == SamplingMode::Mis)
+    if (mode == SamplingMode::Mis) {
       EXPECT_EQ(f.stats.estimator, "brdf") << "mis in a constant environment is the BRDF side alone";
+    }
   }
 }
 
