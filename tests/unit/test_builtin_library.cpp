@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "brdfa/renderer.h"
+#include "device_test.h"
 
 namespace brdfa {
 namespace {
@@ -21,13 +22,6 @@ namespace {
 namespace fs = std::filesystem;
 
 const std::string kBrdfDir = std::string(BRDFA_SOURCE_DIR) + "/shaders/brdfs";
-
-std::string readText(const std::string& path) {
-  std::ifstream in(path);
-  std::stringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
 
 std::vector<std::string> libraryNames() {
   std::vector<std::string> names;
@@ -37,26 +31,12 @@ std::vector<std::string> libraryNames() {
   return names;
 }
 
-std::shared_ptr<const BrdfDefinition> load(const std::string& name) {
-  auto def = parseBrdf(readText(kBrdfDir + "/" + name + ".brdf"));
-  EXPECT_TRUE(def.ok()) << name << ": " << (def.ok() ? "" : def.error().message);
-  if (!def.ok()) return nullptr;
-  return std::make_shared<BrdfDefinition>(def.value());
-}
+std::shared_ptr<const BrdfDefinition> load(const std::string& name) { return builtin(name); }
 
 using Params = std::map<std::string, Vec3>;
 
-class BuiltinLibrary : public ::testing::Test {
+class BuiltinLibrary : public DeviceTest {
  protected:
-  static void SetUpTestSuite() {
-    RendererOptions options;
-    options.shaderDir = std::string(BRDFA_SOURCE_DIR) + "/shaders";
-    auto r = Renderer::create(options);
-    ASSERT_TRUE(r.ok()) << r.error().message;
-    renderer_ = r.value();
-  }
-  static void TearDownTestSuite() { renderer_.reset(); }
-
   // Environment furnace (L_env = 1), hidden background, a sphere filling the view.
   static Frame furnace(std::shared_ptr<const BrdfDefinition> brdf, const Params& params, int size,
                        int spp) {
@@ -96,7 +76,6 @@ class BuiltinLibrary : public ::testing::Test {
     return count ? sum / count : 0;
   }
 
-  static inline std::shared_ptr<Renderer> renderer_;
 };
 
 // Every model that must have a file (the library is at least this).

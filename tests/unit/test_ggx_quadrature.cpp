@@ -15,6 +15,7 @@
 #include <sstream>
 
 #include "brdfa/renderer.h"
+#include "device_test.h"
 #include "old_ggx_brdf.h"
 #include "scene_math.h"
 
@@ -22,13 +23,6 @@ namespace brdfa {
 namespace {
 
 constexpr double kPi = 3.14159265358979323846;
-
-std::string readText(const std::filesystem::path& p) {
-  std::ifstream in(p);
-  std::stringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
 
 // Directional albedo E(mu) = integral of f(L, V) (N.L) dL of single-scattering GGX with F = 1
 // and the height-correlated Smith G2 = 1 / (1 + Lambda(V) + Lambda(L)) (Heitz 2014, eqs. 72 and
@@ -148,21 +142,11 @@ std::vector<PixelGeometry> sphereGeometry(const Camera& camera, int size) {
   return px;
 }
 
-class GgxQuadrature : public ::testing::Test {
+class GgxQuadrature : public DeviceTest {
  protected:
-  static void SetUpTestSuite() {
-    RendererOptions options;
-    options.shaderDir = std::string(BRDFA_SOURCE_DIR) + "/shaders";
-    auto r = Renderer::create(options);
-    ASSERT_TRUE(r.ok()) << r.error().message;
-    renderer_ = r.value();
-  }
-  static void TearDownTestSuite() { renderer_.reset(); }
-
   static std::shared_ptr<const BrdfDefinition> parse(const std::string& text) {
-    auto def = parseBrdf(text);
-    EXPECT_TRUE(def.ok()) << (def.ok() ? "" : def.error().message);
-    return std::make_shared<BrdfDefinition>(def.ok() ? def.value() : BrdfDefinition{});
+    auto def = inlineBrdf(text);
+    return def ? def : std::make_shared<BrdfDefinition>();
   }
 
   // The sphere in the hidden furnace with the file's own sampler (set explicitly: the default
@@ -233,7 +217,6 @@ class GgxQuadrature : public ::testing::Test {
     return c;
   }
 
-  static inline std::shared_ptr<Renderer> renderer_;
 };
 
 TEST_F(GgxQuadrature, TheQuadratureConvergesAndItsTableInterpolates) {
@@ -258,7 +241,7 @@ TEST_F(GgxQuadrature, TheQuadratureConvergesAndItsTableInterpolates) {
 
 // Every pixel of the sphere, sampled with ggx.brdf's sampler, within 1% of the quadrature.
 TEST_F(GgxQuadrature, EverySpherePixelMatchesTheQuadratureWithin1Percent) {
-  const auto ggx = parse(readText(std::string(BRDFA_SOURCE_DIR) + "/shaders/brdfs/ggx.brdf"));
+  const auto ggx = builtin("ggx");
   const int size = 32, spp = 4096;
   const Camera camera;  // (0, 0, 3) looking down -z, fov 45
   const std::vector<PixelGeometry> geometry = sphereGeometry(camera, size);
@@ -283,7 +266,7 @@ TEST_F(GgxQuadrature, EverySpherePixelMatchesTheQuadratureWithin1Percent) {
 // +z, most inside the old |N.z| >= 0.999 branch, at an oblique view. (At the image centre of the
 // default view, V ~ N there and the old frame's error nearly cancels.)
 TEST_F(GgxQuadrature, OldAndFixedSamplersNearTheZAxisAgainstTheQuadrature) {
-  const auto ggx = parse(readText(std::string(BRDFA_SOURCE_DIR) + "/shaders/brdfs/ggx.brdf"));
+  const auto ggx = builtin("ggx");
   const auto old = parse(testdata::kOldGgxBrdf);
   Camera closeUp;
   closeUp.position = {float(3 * std::sqrt(0.5)), 0.0f, float(3 * std::sqrt(0.5))};

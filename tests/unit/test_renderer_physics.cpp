@@ -8,40 +8,13 @@
 #include <sstream>
 
 #include "brdfa/renderer.h"
+#include "device_test.h"
 
 namespace brdfa {
 namespace {
 
-std::string readText(const std::string& path) {
-  std::ifstream in(path);
-  std::stringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
-
-std::shared_ptr<const BrdfDefinition> builtin(const std::string& name) {
-  auto def = parseBrdf(readText(std::string(BRDFA_SOURCE_DIR) + "/shaders/brdfs/" + name + ".brdf"));
-  EXPECT_TRUE(def.ok()) << name;
-  return std::make_shared<BrdfDefinition>(def.value());
-}
-
-std::shared_ptr<const BrdfDefinition> inlineBrdf(const std::string& text) {
-  auto def = parseBrdf(text);
-  EXPECT_TRUE(def.ok()) << (def.ok() ? "" : def.error().message);
-  return std::make_shared<BrdfDefinition>(def.value());
-}
-
-class RendererPhysics : public ::testing::Test {
+class RendererPhysics : public DeviceTest {
  protected:
-  static void SetUpTestSuite() {
-    RendererOptions options;
-    options.shaderDir = std::string(BRDFA_SOURCE_DIR) + "/shaders";
-    auto r = Renderer::create(options);
-    ASSERT_TRUE(r.ok()) << r.error().message;
-    renderer_ = r.value();
-  }
-  static void TearDownTestSuite() { renderer_.reset(); }
-
   static Scene furnaceScene(std::shared_ptr<const BrdfDefinition> brdf, int size, int spp) {
     Scene s;
     s.environment.name = "furnace";
@@ -86,7 +59,6 @@ class RendererPhysics : public ::testing::Test {
     return v.empty() ? 0 : s / v.size();
   }
 
-  static inline std::shared_ptr<Renderer> renderer_;
 };
 
 constexpr const char* kWhiteLambert = R"(analytic

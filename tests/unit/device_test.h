@@ -1,0 +1,50 @@
+// What the unit tests on the real Vulkan device share: one renderer per test suite over the
+// source tree's shaders, and BRDF files parsed from the built-in library or from text.
+#pragma once
+
+#include <gtest/gtest.h>
+
+#include <fstream>
+#include <memory>
+#include <sstream>
+#include <string>
+
+#include "brdfa/renderer.h"
+
+namespace brdfa {
+
+// A whole file of the source tree ("" when it cannot be read).
+inline std::string readSourceFile(const std::string& relative) {
+  std::ifstream in(std::string(BRDFA_SOURCE_DIR) + "/" + relative);
+  std::stringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+// A `.brdf` text parsed; a parse error fails the calling test.
+inline std::shared_ptr<const BrdfDefinition> inlineBrdf(const std::string& text) {
+  auto def = parseBrdf(text);
+  EXPECT_TRUE(def.ok()) << (def.ok() ? "" : def.error().message);
+  return def.ok() ? std::make_shared<BrdfDefinition>(def.value()) : nullptr;
+}
+
+// shaders/brdfs/<name>.brdf parsed.
+inline std::shared_ptr<const BrdfDefinition> builtin(const std::string& name) {
+  return inlineBrdf(readSourceFile("shaders/brdfs/" + name + ".brdf"));
+}
+
+// A fixture whose suite shares one renderer (the device opens once per suite).
+class DeviceTest : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    RendererOptions options;
+    options.shaderDir = std::string(BRDFA_SOURCE_DIR) + "/shaders";
+    auto r = Renderer::create(options);
+    ASSERT_TRUE(r.ok()) << r.error().message;
+    renderer_ = r.value();
+  }
+  static void TearDownTestSuite() { renderer_.reset(); }
+  static inline std::shared_ptr<Renderer> renderer_;
+};
+
+}  // namespace brdfa
