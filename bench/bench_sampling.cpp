@@ -5,6 +5,7 @@
 // table shows medians.
 #include "bench_sampling.h"
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <map>
@@ -68,7 +69,7 @@ double relMse(const Frame& f, const Reference& ref) {
 
 }  // namespace
 
-int runSamplingBench(const std::string& sourceDir, int rounds) {
+int runSamplingBench(const std::string& sourceDir, int rounds, const std::string& sceneFilter) {
   RendererOptions options;
   options.shaderDir = sourceDir + "/shaders";
   auto renderer = Renderer::create(options);
@@ -86,6 +87,10 @@ int runSamplingBench(const std::string& sourceDir, int rounds) {
                                        {{"roughness", {0.2f, 0.2f, 0.2f}}}});
   else
     std::printf("(blender-data is not installed: the blender world row is left out)\n");
+  if (!sceneFilter.empty())
+    scenes.erase(std::remove_if(scenes.begin(), scenes.end(),
+                                [&](const BenchScene& b) { return b.label.find(sceneFilter) == std::string::npos; }),
+                 scenes.end());
   const SamplingMode modes[] = {SamplingMode::Cosine, SamplingMode::Brdf, SamplingMode::Environment, SamplingMode::Mis};
 
   std::printf("\nSampling strategies at equal time (%dx%d sphere, %.0f ms of render time each, interleaved; "

@@ -17,18 +17,6 @@ double rectSolidAngle(double s0, double s1, double t0, double t1) {
   return areaElement(s0, t0) - areaElement(s0, t1) - areaElement(s1, t0) + areaElement(s1, t1);
 }
 
-uint32_t floatBits(float f) {
-  uint32_t u;
-  std::memcpy(&u, &f, sizeof u);
-  return u;
-}
-
-float bitsFloat(uint32_t u) {
-  float f;
-  std::memcpy(&f, &u, sizeof f);
-  return f;
-}
-
 }  // namespace
 
 EnvironmentDistribution buildEnvironmentDistribution(const EnvironmentData& env, uint32_t maxCellsPerEdge) {
@@ -132,7 +120,7 @@ EnvironmentDistribution buildEnvironmentDistribution(const EnvironmentData& env,
   for (size_t c = 0; c < cells; ++c) {
     float* e = &out.table[4 * (c + 1)];
     e[0] = float(q[c]);
-    e[1] = bitsFloat(alias[c]);
+    e[1] = float(alias[c]);  // exact: at most 6 * 256^2 cells, far below 2^24
     e[2] = float(p[c] * areaScale);
     e[3] = float(p[alias[c]] * areaScale);
   }
@@ -157,7 +145,7 @@ std::vector<double> EnvironmentDistribution::realisedCellProbabilities() const {
   for (size_t c = 0; c < cells; ++c) {
     const float* e = &table[4 * (c + 1)];
     p[c] += double(e[0]) / double(cells);
-    p[floatBits(e[1])] += (1.0 - double(e[0])) / double(cells);
+    p[size_t(e[1])] += (1.0 - double(e[0])) / double(cells);
   }
   return p;
 }

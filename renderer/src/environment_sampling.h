@@ -21,7 +21,8 @@ struct EnvironmentDistribution {
   uint32_t cellsPerEdge = 0;      // D: cells per face edge (a face is D x D cells), a power of two
   double effectiveDensity = 0;    // integral of pdf^2 over the sphere: how concentrated it is
   // 4 floats an entry. Entry 0: (D, effectiveDensity, log2 D, 0). Entry 1 + c for cell
-  // c = (face * D + row) * D + column: (q_c, alias_c as uint bits, density_c, density_alias_c),
+  // c = (face * D + row) * D + column: (q_c, alias_c (an integer, exact in a float), density_c,
+  // density_alias_c),
   // density = P(cell) * (D/2)^2, so pdf(w) = density / |w_major|^3.
   std::vector<float> table;
 

@@ -23,14 +23,18 @@ struct GpuMesh {
   uint32_t indexCount = 0;
 };
 
+inline constexpr uint32_t kEnvironmentTableWidth = 4096;  // BRDFA_ENV_TABLE_WIDTH_LOG2 = 12 in the GLSL
+
 struct GpuEnvironment {
   std::string name;
   bool constant = false;
   float scale = 1.0f;  // radiance = texel * scale (packHalfCube); folded into the intensity push constant
   Image cube;  // RGBA16F, SHADER_READ_ONLY_OPTIMAL
-  // Importance-sampling table (environment_sampling.h), a storage buffer at set 0 binding 9; a
-  // constant environment has only the header (D = 0: kernels sample it uniformly).
-  Buffer table;
+  // Importance-sampling table (environment_sampling.h) as an RGBA32F image of
+  // kEnvironmentTableWidth texels per row, read with texelFetch at set 0 binding 9 (on a CPU
+  // device a texel fetch is a SIMD gather, a storage-buffer load one bounds-checked load per lane:
+  // 2.5x the cost of a whole sample). A constant environment has only the header (D = 0).
+  Image table;
   std::shared_ptr<const EnvironmentDistribution> distribution;  // the same table on the host; null when constant
 };
 

@@ -65,8 +65,8 @@ Result<void> RenderViewImpl::init() {
   cmd_ = std::move(cmd.value());
 
   // New objects are built before the old ones are released, hence room for two scenes' worth.
-  VkDescriptorPoolSize sizes[3] = {{VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 7 * kMaxJitter},
-                                   {VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, kMaxJitter + 8 * kMaxObjects},
+  VkDescriptorPoolSize sizes[3] = {{VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 6 * kMaxJitter},
+                                   {VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, 2 * kMaxJitter + 8 * kMaxObjects},
                                    {VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, 4 * kMaxObjects}};
   VkDescriptorPoolCreateInfo pci{VK_STRUCTURE_TYPE_DESCRIPTOR_POOL_CREATE_INFO};
   pci.flags = VK_DESCRIPTOR_POOL_CREATE_FREE_DESCRIPTOR_SET_BIT;
@@ -159,20 +159,20 @@ Result<void> RenderViewImpl::resize(uint32_t width, uint32_t height) {
 
 void RenderViewImpl::writeViewDescriptors() {
   VkDescriptorImageInfo env{r_->environmentSampler(), env_->cube.view(), VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL};
-  const std::pair<uint32_t, const Buffer*> buffers[7] = {{0, &gbuffer_},  {3, &accum_},    {4, &counters_},
-                                                         {6, &outRgba8_}, {7, &outFloat_}, {8, &partials_},
-                                                         {9, &env_->table}};
+  VkDescriptorImageInfo table{r_->environmentSampler(), env_->table.view(), VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL};
+  const std::pair<uint32_t, const Buffer*> buffers[6] = {{0, &gbuffer_},  {3, &accum_},    {4, &counters_},
+                                                         {6, &outRgba8_}, {7, &outFloat_}, {8, &partials_}};
   const VkDeviceSize sliceBytes = VkDeviceSize(width_) * height_ * 3 * 16;
   // Every set is written (unused slices alias slice 0) so that no set is ever left invalid.
   for (uint32_t slice = 0; slice < kMaxJitter; ++slice) {
-    VkDescriptorBufferInfo infos[7];
+    VkDescriptorBufferInfo infos[6];
     VkWriteDescriptorSet w[8] = {};
     for (uint32_t i = 0; i < 8; ++i) {
       w[i].sType = VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET;
       w[i].dstSet = viewSets_[slice];
       w[i].descriptorCount = 1;
     }
-    for (uint32_t i = 0; i < 7; ++i) {
+    for (uint32_t i = 0; i < 6; ++i) {
       infos[i] = {buffers[i].second->handle(), 0, VK_WHOLE_SIZE};
       w[i].dstBinding = buffers[i].first;
       w[i].descriptorType = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER;
@@ -180,9 +180,12 @@ void RenderViewImpl::writeViewDescriptors() {
     }
     infos[0].offset = (slice < jitterCount_ ? slice : 0) * sliceStride_;
     infos[0].range = sliceBytes;
-    w[7].dstBinding = 5;
+    w[6].dstBinding = 5;
+    w[6].descriptorType = VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER;
+    w[6].pImageInfo = &env;
+    w[7].dstBinding = 9;
     w[7].descriptorType = VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER;
-    w[7].pImageInfo = &env;
+    w[7].pImageInfo = &table;
     vkUpdateDescriptorSets(r_->ctx().device(), 8, w, 0, nullptr);
   }
 }

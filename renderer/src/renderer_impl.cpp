@@ -143,7 +143,7 @@ Result<void> RendererImpl::createLayouts() {
       {0, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER},  {3, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER},
       {4, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER},  {5, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER},
       {6, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER},  {7, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER},
-      {8, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER},  {9, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER}}};
+      {8, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER},  {9, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER}}};
   std::array<VkDescriptorSetLayoutBinding, 8> view{};
   for (size_t i = 0; i < view.size(); ++i)
     view[i] = {viewBindings[i].first, viewBindings[i].second, 1, VK_SHADER_STAGE_COMPUTE_BIT, nullptr};
@@ -634,15 +634,23 @@ Result<std::shared_ptr<GpuEnvironment>> RendererImpl::uploadEnvironment(const st
   std::shared_ptr<const EnvironmentDistribution> distribution;
   std::vector<float> header = {0.0f, float(1.0 / (4.0 * M_PI)), 0.0f, 0.0f};
   if (!data.constant) distribution = std::make_shared<const EnvironmentDistribution>(buildEnvironmentDistribution(data));
-  const std::vector<float>& table = distribution ? distribution->table : header;
-  auto tableBuffer = deviceBufferWith(*ctx_, table.data(), table.size() * sizeof(float), VK_BUFFER_USAGE_STORAGE_BUFFER_BIT);
-  if (!tableBuffer) return tableBuffer.takeError();
+  std::vector<float> table = distribution ? distribution->table : header;
+  ImageSpec tableSpec;
+  const uint32_t entries = static_cast<uint32_t>(table.size() / 4);
+  tableSpec.width = std::min(entries, kEnvironmentTableWidth);
+  tableSpec.height = (entries + kEnvironmentTableWidth - 1) / kEnvironmentTableWidth;
+  tableSpec.format = VK_FORMAT_R32G32B32A32_SFLOAT;
+  tableSpec.usage = VK_IMAGE_USAGE_SAMPLED_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT;
+  table.resize(size_t(tableSpec.width) * tableSpec.height * 4, 0.0f);  // the last row padded
+  auto tableImage = Image::create(*ctx_, tableSpec);
+  if (!tableImage) return tableImage.takeError();
+  BRDFA_TRY(uploadImage(*ctx_, *tableImage, table.data(), table.size() * sizeof(float)));
   auto env = std::make_shared<GpuEnvironment>();
   env->name = name;
   env->constant = data.constant;
   env->scale = half.scale;
   env->cube = std::move(image.value());
-  env->table = std::move(tableBuffer.value());
+  env->table = std::move(tableImage.value());
   env->distribution = std::move(distribution);
   return env;
 }

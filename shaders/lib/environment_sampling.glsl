@@ -4,37 +4,32 @@
 // A constant environment (the furnace) has no table: it is sampled uniformly over the sphere.
 
 // Direction through (s, t) of cube face `face`, not normalised (its major component is +-1):
-// the Vulkan cube convention, as cubeFaceDirection in renderer/src/environment_maps.cpp.
+// the Vulkan cube convention, as cubeFaceDirection in renderer/src/environment_maps.cpp:
+//   +X (1, -t, -s)  -X (-1, -t, s)  +Y (s, 1, t)  -Y (s, -1, -t)  +Z (s, -t, 1)  -Z (-s, -t, -1).
+// Written with selects, not branches: a CPU device runs every branch of divergent code for all
+// its SIMD lanes, and neighbouring lanes draw from different faces.
 vec3 brdfa_cubeFacePoint(uint face, vec2 st) {
-  if (face == 0u) return vec3(1.0, -st.y, -st.x);
-  if (face == 1u) return vec3(-1.0, -st.y, st.x);
-  if (face == 2u) return vec3(st.x, 1.0, st.y);
-  if (face == 3u) return vec3(st.x, -1.0, -st.y);
-  if (face == 4u) return vec3(st.x, -st.y, 1.0);
-  return vec3(-st.x, -st.y, -1.0);
+  uint axis = face >> 1u;
+  float sgn = (face & 1u) == 0u ? 1.0 : -1.0;
+  vec3 onX = vec3(sgn, -st.y, -sgn * st.x);
+  vec3 onY = vec3(st.x, sgn, sgn * st.y);
+  vec3 onZ = vec3(sgn * st.x, -st.y, sgn);
+  return axis == 0u ? onX : (axis == 1u ? onY : onZ);
 }
 
 // The face holding unit direction `d`, the point (s, t) where d meets it, and |d_major|: the
-// inverse of brdfa_cubeFacePoint (cubeFaceCoords in environment_maps.cpp).
+// inverse of brdfa_cubeFacePoint (cubeFaceCoords in environment_maps.cpp), with selects too.
 uint brdfa_cubeFaceCoords(vec3 d, out vec2 st, out float major) {
   vec3 a = abs(d);
-  uint face;
-  vec2 sc;
-  if (a.x >= a.y && a.x >= a.z) {
-    face = d.x >= 0.0 ? 0u : 1u;
-    sc = vec2(d.x >= 0.0 ? -d.z : d.z, -d.y);
-    major = a.x;
-  } else if (a.y >= a.z) {
-    face = d.y >= 0.0 ? 2u : 3u;
-    sc = vec2(d.x, d.y >= 0.0 ? d.z : -d.z);
-    major = a.y;
-  } else {
-    face = d.z >= 0.0 ? 4u : 5u;
-    sc = vec2(d.z >= 0.0 ? d.x : -d.x, -d.y);
-    major = a.z;
-  }
+  bool onX = a.x >= a.y && a.x >= a.z;
+  bool onY = !onX && a.y >= a.z;
+  uint axis = onX ? 0u : (onY ? 1u : 2u);
+  float m = onX ? d.x : (onY ? d.y : d.z);  // the major component, signed
+  float sgn = m >= 0.0 ? 1.0 : -1.0;
+  vec2 sc = onX ? vec2(-sgn * d.z, -d.y) : (onY ? vec2(d.x, sgn * d.z) : vec2(sgn * d.x, -d.y));
+  major = abs(m);
   st = sc / major;
-  return face;
+  return 2u * axis + (m >= 0.0 ? 0u : 1u);
 }
 
 // The table's header, read once per pixel (brdfa_environmentBegin) instead of once per sample.
@@ -43,7 +38,7 @@ float brdfa_envD = 0.0;    // cells per face edge
 
 void brdfa_environmentBegin() {
 #if !defined(BRDFA_ENV_CONSTANT)
-  vec4 header = brdfa_envTable[0];
+  vec4 header = brdfa_envEntry(0u);
   brdfa_envD = header.x;
   brdfa_envLog2D = uint(header.z);
 #endif
@@ -62,7 +57,7 @@ float brdfa_environmentPdf(vec3 d) {
   // guard: s or t at exactly +1 (the face's far edge) would index one cell past the row.
   uvec2 cell = min(uvec2(max((st + 1.0) * (0.5 * brdfa_envD), vec2(0.0))), uvec2(last));
   uint index = (((face << brdfa_envLog2D) + cell.y) << brdfa_envLog2D) + cell.x;
-  return brdfa_envTable[1u + index].z / (major * major * major);
+  return brdfa_envEntry(1u + index).z / (major * major * major);
 #endif
 }
 
@@ -80,10 +75,10 @@ vec3 brdfa_sampleEnvironment(uvec4 u, out float pdf) {
 #else
   uint cell, unused;
   umulExtended(u.x, 6u << (2u * brdfa_envLog2D), cell, unused);  // floor(u.x * cells / 2^32)
-  vec4 e = brdfa_envTable[1u + cell];
+  vec4 e = brdfa_envEntry(1u + cell);
   float density = e.z;
   if (brdfa_unorm(u.y) >= e.x) {
-    cell = floatBitsToUint(e.y);
+    cell = uint(e.y);
     density = e.w;
   }
   uint last = (1u << brdfa_envLog2D) - 1u;
@@ -102,6 +97,6 @@ float brdfa_environmentConcentration() {
 #if defined(BRDFA_ENV_CONSTANT)
   return 1.0 / (4.0 * BRDFA_PI);
 #else
-  return brdfa_envTable[0].y;
+  return brdfa_envEntry(0u).y;
 #endif
 }
