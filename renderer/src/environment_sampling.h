@@ -39,7 +39,8 @@ struct EnvironmentDistribution {
 // (each texel's luminance blurred by [1/8, 3/4, 1/8] in s and t, the exact cell integral of the
 // tent each texel spreads into its neighbours), times the cell's solid angle, plus a uniform floor
 // holding 1e-4 of the total weight, so every direction where the filtered map is non-zero has a
-// non-zero density (seams included). A black environment becomes uniform over the sphere.
+// non-zero density (seams included). A black environment becomes uniform over the
+// sphere (up to the |w_major|^3 variation inside each cell).
 EnvironmentDistribution buildEnvironmentDistribution(const EnvironmentData& env, uint32_t maxCellsPerEdge = 256);
 
 }  // namespace brdfa
