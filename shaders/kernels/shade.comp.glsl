@@ -91,8 +91,10 @@ void main() {
 #endif
 
   uint seed = brdfa_pc.target.y;  // render.seed
-  uvec4 rotation[2] = uvec4[2](brdfa_halfRotation(p, 0u, seed), brdfa_halfRotation(p, 1u, seed));
+  uvec4 rotationA = brdfa_halfRotation(p, 0u, seed), rotationB = brdfa_halfRotation(p, 1u, seed);
+#if defined(BRDFA_SAMPLING_ENVIRONMENT) || defined(BRDFA_SAMPLING_MIS)
   brdfa_environmentBegin();
+#endif
 #if defined(BRDFA_SAMPLING_MIS)
   // c in eighths (0.125 .. 0.875), exact in 32-bit fixed point, so the strategy test below and
   // the weight use exactly the same c. The phase is one random number per half for the whole
@@ -107,14 +109,16 @@ void main() {
 #endif
   uint first = brdfa_pc.frame.z;
   uint count = brdfa_pc.frame.w;
-  vec3 sums[2] = vec3[2](vec3(0.0), vec3(0.0));
-  uint kept[2] = uint[2](0u, 0u);
+  // Sums of all kept samples and of half B's (half A's is the difference): no branch or
+  // dynamically indexed array in the loop, which a CPU device turns into per-lane memory.
+  vec3 sumAll = vec3(0.0), sumB = vec3(0.0);
+  uint keptAll = 0u, keptB = 0u;
   uint dropped = 0u;
   for (uint s = 0u; s < count; ++s) {
     uint i = first + s;
     uint h = i & 1u;
     uint j = i >> 1u;
-    uvec4 u = brdfa_sample4D(rotation[h], j);
+    uvec4 u = brdfa_sample4D(h == 0u ? rotationA : rotationB, j);
 #if defined(BRDFA_LEGACY_RENDER)
     float unusedWeight;
     vec3 l = brdfa_sampleUniformHemisphere(brdfa_unorm2(u.xy), unusedWeight);
@@ -179,17 +183,14 @@ void main() {
       ++dropped;
       continue;
     }
-    if (h == 0u) {
-      sums[0] += c;
-      ++kept[0];
-    } else {
-      sums[1] += c;
-      ++kept[1];
-    }
+    sumAll += c;
+    sumB += c * float(h);
+    ++keptAll;
+    keptB += h;
   }
   float intensity = brdfa_environmentIntensity();
-  vec4 valueA = vec4(sums[0] * intensity, float(kept[0]));
-  vec4 valueB = vec4(sums[1] * intensity, float(kept[1]));
+  vec4 valueA = vec4((sumAll - sumB) * intensity, float(keptAll - keptB));
+  vec4 valueB = vec4(sumB * intensity, float(keptB));
   uint offsetB = brdfa_halfOffset(1u) + pixel;
   if (brdfa_pc.target.w != 0u) {
     // First pass after a restart: overwrite this pixel's halves instead of adding, so a change
