@@ -44,6 +44,20 @@ class DeviceTest : public ::testing::Test {
     renderer_ = r.value();
   }
   static void TearDownTestSuite() { renderer_.reset(); }
+
+  // Runs passes until the view is done (converged or max_samples reached) and reads the frame
+  // with linear radiance.
+  static Frame renderUntilDone(RenderView& view) {
+    for (int guard = 0; guard < 1000000; ++guard) {
+      auto pass = view.renderPass();
+      EXPECT_TRUE(pass.ok());
+      if (!pass.ok() || pass->done()) break;
+    }
+    auto frame = view.readFrame(true);
+    EXPECT_TRUE(frame.ok());
+    return frame.ok() ? frame.value() : Frame{};
+  }
+
   static inline std::shared_ptr<Renderer> renderer_;
 };
 

@@ -65,17 +65,11 @@ class Estimators : public DeviceTest {
   // A 4 x 4 plane filling a `size`^2 view, turned `tiltDegrees` about X from facing the camera.
   static Scene planeScene(std::shared_ptr<const BrdfDefinition> brdf, const std::string& env, float tiltDegrees,
                           int size) {
-    Scene s;
-    s.environment.name = env;
-    s.environment.visible = false;
-    s.render.width = s.render.height = size;
-    s.render.samplesPerFrame = 64;
-    SceneObject o;
-    o.brdf = std::move(brdf);
+    Scene s = sphereScene(std::move(brdf), env, size);
+    SceneObject& o = s.objects[0];
     o.mesh = "plane";
     o.rotate = {90.0f + tiltDegrees, 0, 0};
     o.scale = {2.5f, 2.5f, 2.5f};
-    s.objects.push_back(o);
     return s;
   }
 
@@ -86,6 +80,7 @@ class Estimators : public DeviceTest {
     return n.z < 0 ? -n : n;
   }
 
+  // A unit sphere in the hidden environment `env`, `size`^2 pixels, 64 samples a pass.
   static Scene sphereScene(std::shared_ptr<const BrdfDefinition> brdf, const std::string& env, int size) {
     Scene s;
     s.environment.name = env;
@@ -103,14 +98,7 @@ class Estimators : public DeviceTest {
     scene.render.maxSamples = spp;
     auto set = view.setScene(scene);  // a higher max_samples continues the accumulation
     EXPECT_TRUE(set.ok()) << set.error().message;
-    for (int guard = 0; guard < 1000000; ++guard) {
-      auto pass = view.renderPass();
-      EXPECT_TRUE(pass.ok());
-      if (!pass.ok() || pass->done()) break;
-    }
-    auto frame = view.readFrame(true);
-    EXPECT_TRUE(frame.ok());
-    return frame.ok() ? frame.value() : Frame{};
+    return renderUntilDone(view);
   }
 
   static std::unique_ptr<RenderView> newView(const Scene& scene) {

@@ -28,16 +28,7 @@ class RendererPhysics : public DeviceTest {
     return s;
   }
 
-  static Frame renderToConvergence(RenderView& view) {
-    for (int guard = 0; guard < 100000; ++guard) {
-      auto pass = view.renderPass();
-      EXPECT_TRUE(pass.ok());
-      if (!pass.ok() || pass->done()) break;
-    }
-    auto frame = view.readFrame(true);
-    EXPECT_TRUE(frame.ok());
-    return frame.ok() ? frame.value() : Frame{};
-  }
+  static Frame renderToConvergence(RenderView& view) { return renderUntilDone(view); }
 
   // Pixels whose 3x3 neighbourhood is covered (away from the silhouette), by red channel.
   static std::vector<float> interior(const Frame& f) {
