@@ -208,7 +208,8 @@ Result<std::vector<RenderViewImpl::ObjectState>> RenderViewImpl::buildObjects(co
     const SceneObject& so = scene.objects[i];
     const std::string at = "objects[" + std::to_string(i) + "]";
     ObjectState o;
-    auto kernel = r_->shadeKernel(*so.brdf, scene.render.sampling, constantEnv);
+    o.variant = shadeVariant(*so.brdf, scene.render.sampling, constantEnv);
+    auto kernel = r_->shadeKernel(*so.brdf, o.variant, constantEnv);
     if (!kernel) {
       Error e = kernel.takeError();
       if (e.field.empty()) e.field = at + ".brdf";
@@ -345,12 +346,16 @@ Result<void> RenderViewImpl::setScene(const Scene& scene) {
   stats_.vertices = stats_.triangles = stats_.programBytes = 0;
   stats_.estimator.clear();
   stats_.warnings.clear();
-  for (const SceneObject& so : scene_.objects) {
-    ShadeVariant v = shadeVariant(*so.brdf, scene_.render.sampling, env_ && env_->constant);
-    if (stats_.estimator.find(v.estimator) == std::string::npos)
+  std::vector<std::string> estimators;  // distinct, in object order
+  for (size_t i = 0; i < objects_.size(); ++i) {
+    const ShadeVariant& v = objects_[i].variant;
+    if (std::find(estimators.begin(), estimators.end(), v.estimator) == estimators.end()) {
+      estimators.push_back(v.estimator);
       stats_.estimator += (stats_.estimator.empty() ? "" : ", ") + v.estimator;
-    for (std::string& w : v.warnings) {
-      std::string named = so.brdfName.empty() ? w : so.brdfName + ": " + w;
+    }
+    const std::string& brdfName = scene_.objects[i].brdfName;
+    for (const std::string& w : v.warnings) {
+      std::string named = brdfName.empty() ? w : brdfName + ": " + w;
       if (std::find(stats_.warnings.begin(), stats_.warnings.end(), named) == stats_.warnings.end())
         stats_.warnings.push_back(std::move(named));
     }

@@ -28,6 +28,7 @@ class RenderViewImpl final : public RenderView {
  private:
   struct ObjectState {
     std::shared_ptr<const ShadeKernel> kernel;
+    ShadeVariant variant;  // what the kernel runs, for the stats' estimator and warnings
     std::shared_ptr<const GpuMesh> mesh;
     std::shared_ptr<const GpuTexture> textures[kMaxTextures];  // null: white
     Buffer params;     // std140 BrdfParams

@@ -415,7 +415,11 @@ ShadeVariant shadeVariant(const BrdfDefinition& brdf, SamplingMode sampling, boo
 
 AssembledProgram RendererImpl::assembleShadeProgram(const BrdfDefinition& brdf, SamplingMode sampling,
                                                     bool constantEnv) const {
-  const ShadeVariant variant = shadeVariant(brdf, sampling, constantEnv);
+  return assembleShadeProgram(brdf, shadeVariant(brdf, sampling, constantEnv), constantEnv);
+}
+
+AssembledProgram RendererImpl::assembleShadeProgram(const BrdfDefinition& brdf, const ShadeVariant& variant,
+                                                    bool constantEnv) const {
   // The file's sampler is compiled in only where it is used: its code would otherwise count
   // towards the features the program needs (brdf_features.cpp).
   BrdfDefinition used = brdf;
@@ -457,8 +461,8 @@ Result<CompileInfo> RendererImpl::compileBrdf(const BrdfDefinition& brdf) {
 }
 
 Result<std::shared_ptr<const ShadeKernel>> RendererImpl::shadeKernel(const BrdfDefinition& brdf,
-                                                                     SamplingMode sampling, bool constantEnv) {
-  return compiledKernel(assembleShadeProgram(brdf, sampling, constantEnv));
+                                                                     const ShadeVariant& variant, bool constantEnv) {
+  return compiledKernel(assembleShadeProgram(brdf, variant, constantEnv));
 }
 
 Result<int> RendererImpl::preloadFromCache(const BrdfDefinition& brdf) {

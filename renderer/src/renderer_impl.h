@@ -74,7 +74,8 @@ class RendererImpl final : public Renderer, public std::enable_shared_from_this<
   // Binds `textures` (null entries: white) to set 1 bindings 2..5 of `objectSet`.
   void writeTextures(VkDescriptorSet objectSet, const std::shared_ptr<const GpuTexture> (&textures)[kMaxTextures]) const;
   // The shading kernel for `brdf` in this variant; compiled once, then served from the cache.
-  Result<std::shared_ptr<const ShadeKernel>> shadeKernel(const BrdfDefinition& brdf, SamplingMode sampling,
+  // `variant` is shadeVariant(brdf, sampling, constantEnv), which the caller keeps for its stats.
+  Result<std::shared_ptr<const ShadeKernel>> shadeKernel(const BrdfDefinition& brdf, const ShadeVariant& variant,
                                                          bool constantEnv);
 
  private:
@@ -91,6 +92,7 @@ class RendererImpl final : public Renderer, public std::enable_shared_from_this<
   Result<std::shared_ptr<const SpirvBinary>> spirv(ShaderStage stage, const std::string& source, bool* cached,
                                                    bool compileOnMiss = true);
   AssembledProgram assembleShadeProgram(const BrdfDefinition& brdf, SamplingMode sampling, bool constantEnv) const;
+  AssembledProgram assembleShadeProgram(const BrdfDefinition& brdf, const ShadeVariant& variant, bool constantEnv) const;
   // A check kernel (kernels/<kernel>) specialized to `brdf`.
   AssembledProgram assembleCheckProgram(const BrdfDefinition& brdf, const char* kernel) const;
   // Runs a check kernel once per entry of `settings` over `invocations` invocations with an

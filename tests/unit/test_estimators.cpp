@@ -303,7 +303,14 @@ TEST_F(Estimators, EstimatorAndWarningsNameWhatRuns) {
   auto view = newView(s);
   EXPECT_EQ(view->stats().estimator, "mis(environment+brdf)");
   EXPECT_TRUE(view->stats().warnings.empty());
-  s.objects[0].brdf = builtin("oren_nayar");  // no sampler
+  // Several objects: each distinct estimator once, in object order.
+  SceneObject second = s.objects[0];
+  second.brdf = builtin("oren_nayar");  // no sampler
+  second.translate = {1.5f, 0, 0};
+  s.objects.push_back(second);
+  ASSERT_TRUE(view->setScene(s).ok());
+  EXPECT_EQ(view->stats().estimator, "mis(environment+brdf), mis(environment+cosine)");
+  s.objects.erase(s.objects.begin());
   ASSERT_TRUE(view->setScene(s).ok());
   EXPECT_EQ(view->stats().estimator, "mis(environment+cosine)");
   // A sampler without pdfBRDF cannot take part in MIS: said in stats and at validation.
