@@ -352,6 +352,9 @@ export const checks = [
     await page.click('#library .lib-delete');
     await until('ui_saved deleted', async () => (await fetch(`${env.server.url}/api/brdfs/ui_saved`)).status === 404);
     assert.match(dialogs[2], /Delete "ui_saved"/);
+    // The page saves the scratch copy after the DELETE answers: wait for it, then check both.
+    await until('the scratch copy to hold the deleted text', async () =>
+      (await http(env, 'GET', `/api/brdfs/${scratch}`)).source === saved);
     assert.equal((await http(env, 'GET', `/api/sessions/${sid}/scene`)).objects[0].brdf, scratch);
     assert.equal((await http(env, 'GET', `/api/brdfs/${scratch}`)).source, saved, 'the scratch copy holds the deleted text');
     await until('the list to drop it', async () =>
