@@ -206,7 +206,7 @@ Result<void> RendererImpl::runCheckKernel(const BrdfDefinition& brdf, const char
   VkDescriptorBufferInfo paramInfo{params->handle(), 0, VK_WHOLE_SIZE};
   if (!env) env = furnace->get();
   VkDescriptorImageInfo envInfo{envSampler_, env->cube.view(), VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL};
-  VkDescriptorImageInfo tableInfo{envSampler_, env->table.view(), VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL};
+  VkDescriptorImageInfo tableInfo{tableSampler_, env->table.view(), VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL};
   std::vector<VkWriteDescriptorSet> writes;
   for (uint32_t binding : {0u, 3u, 4u, 6u, 7u, 8u})
     writes.push_back({VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET, nullptr, sets[0], binding, 0, 1,

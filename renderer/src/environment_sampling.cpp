@@ -1,6 +1,7 @@
 #include "environment_sampling.h"
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
 
 namespace brdfa {
@@ -112,19 +113,28 @@ EnvironmentDistribution buildEnvironmentDistribution(const EnvironmentData& env,
     effective += p[c] * p[c] / omega;  // (p/omega)^2 * omega, the cell's mean density squared
   }
   out.effectiveDensity = effective;
-  out.table.resize(4 * (cells + 1));
-  out.table[0] = float(D);
-  out.table[1] = float(effective);
-  out.table[2] = float(std::log2(double(D)));
+  // q in 13 bits: a cell that keeps everything aliases itself; any other keeps at least 1/8192
+  // (guard: a q rounded to 0 would make a cell with no other way in unreachable). The table
+  // then realises slightly different probabilities than p, and the densities are those.
+  constexpr uint32_t kOne = 1u << EnvironmentDistribution::kAliasShift;
+  out.table.assign(2 * (cells + 1), 0u);
+  out.table[0] = uint32_t(std::lround(std::log2(double(D))));
+  out.table[1] = std::bit_cast<uint32_t>(float(effective));
   for (size_t c = 0; c < cells; ++c) {
-    float* e = &out.table[4 * (c + 1)];
-    e[0] = float(q[c]);
-    e[1] = float(alias[c]);  // exact: at most 6 * 256^2 cells, far below 2^24
-    e[2] = float(p[c] * areaScale);
-    e[3] = float(p[alias[c]] * areaScale);
+    const bool keepsAll = alias[c] == c || q[c] >= 1.0 - 0.5 / kOne;
+    const uint32_t k = keepsAll ? 0u : uint32_t(std::clamp<long>(std::lround(q[c] * kOne), 1, kOne - 1));
+    out.table[2 * (c + 1)] = (keepsAll ? uint32_t(c) : alias[c]) << EnvironmentDistribution::kAliasShift | k;
   }
+  const std::vector<double> realised = out.realisedCellProbabilities();
+  for (size_t c = 0; c < cells; ++c) out.table[2 * (c + 1) + 1] = std::bit_cast<uint32_t>(float(realised[c] * areaScale));
   return out;
 }
+
+std::vector<uint32_t> EnvironmentDistribution::constantHeader() {
+  return {0u, std::bit_cast<uint32_t>(float(1.0 / (4.0 * M_PI)))};
+}
+
+float EnvironmentDistribution::density(size_t cell) const { return std::bit_cast<float>(table[2 * (cell + 1) + 1]); }
 
 double EnvironmentDistribution::pdf(const float dir[3]) const {
   int face;
@@ -135,16 +145,21 @@ double EnvironmentDistribution::pdf(const float dir[3]) const {
   const uint32_t cy = std::min(uint32_t(std::max(0.0f, (t + 1.0f) * 0.5f * float(D))), D - 1);
   const size_t c = (size_t(face) * D + cy) * D + cx;
   const double major = std::max({std::abs(dir[0]), std::abs(dir[1]), std::abs(dir[2])});
-  return table[4 * (c + 1) + 2] / (major * major * major);
+  return density(c) / (major * major * major);
 }
 
 std::vector<double> EnvironmentDistribution::realisedCellProbabilities() const {
-  const size_t cells = table.size() / 4 - 1;
+  const size_t cells = table.size() / 2 - 1;
+  const double one = double(1u << kAliasShift);
   std::vector<double> p(cells, 0.0);
   for (size_t c = 0; c < cells; ++c) {
-    const float* e = &table[4 * (c + 1)];
-    p[c] += double(e[0]) / double(cells);
-    p[size_t(e[1])] += (1.0 - double(e[0])) / double(cells);
+    const uint32_t k = keepThreshold(c), a = aliasOf(c);
+    if (a == c) {
+      p[c] += 1.0 / double(cells);
+      continue;
+    }
+    p[c] += (double(k) / one) / double(cells);
+    p[a] += (1.0 - double(k) / one) / double(cells);
   }
   return p;
 }

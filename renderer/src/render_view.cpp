@@ -159,7 +159,7 @@ Result<void> RenderViewImpl::resize(uint32_t width, uint32_t height) {
 
 void RenderViewImpl::writeViewDescriptors() {
   VkDescriptorImageInfo env{r_->environmentSampler(), env_->cube.view(), VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL};
-  VkDescriptorImageInfo table{r_->environmentSampler(), env_->table.view(), VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL};
+  VkDescriptorImageInfo table{r_->tableSampler(), env_->table.view(), VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL};
   const std::pair<uint32_t, const Buffer*> buffers[6] = {{0, &gbuffer_},  {3, &accum_},    {4, &counters_},
                                                          {6, &outRgba8_}, {7, &outFloat_}, {8, &partials_}};
   const VkDeviceSize sliceBytes = VkDeviceSize(width_) * height_ * 3 * 16;

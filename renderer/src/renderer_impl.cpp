@@ -84,6 +84,11 @@ Result<void> RendererImpl::init(const RendererOptions& options) {
 
   sci.addressModeU = sci.addressModeV = sci.addressModeW = VK_SAMPLER_ADDRESS_MODE_REPEAT;
   BRDFA_VK_TRY(vkCreateSampler(ctx_->device(), &sci, nullptr, &textureSampler_));
+  // The sampling table is integer and read with texelFetch: a nearest sampler, since integer
+  // formats have no linear filtering.
+  sci.magFilter = sci.minFilter = VK_FILTER_NEAREST;
+  sci.addressModeU = sci.addressModeV = sci.addressModeW = VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_EDGE;
+  BRDFA_VK_TRY(vkCreateSampler(ctx_->device(), &sci, nullptr, &tableSampler_));
   ImageSpec white;
   white.format = VK_FORMAT_R8G8B8A8_UNORM;
   white.usage = VK_IMAGE_USAGE_SAMPLED_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT;
@@ -126,6 +131,7 @@ RendererImpl::~RendererImpl() {
   backgroundCube_.reset();
   if (envSampler_) vkDestroySampler(d, envSampler_, nullptr);
   if (textureSampler_) vkDestroySampler(d, textureSampler_, nullptr);
+  if (tableSampler_) vkDestroySampler(d, tableSampler_, nullptr);
   whiteTexture_ = Image();
   if (gbufferPipeline_) vkDestroyPipeline(d, gbufferPipeline_, nullptr);
   if (gbufferPass_) vkDestroyRenderPass(d, gbufferPass_, nullptr);
@@ -636,19 +642,18 @@ Result<std::shared_ptr<GpuEnvironment>> RendererImpl::uploadEnvironment(const st
   const HalfCube half = packHalfCube(data);
   BRDFA_TRY(uploadImage(*ctx_, *image, half.texels.data(), half.texels.size() * sizeof(uint16_t)));
   std::shared_ptr<const EnvironmentDistribution> distribution;
-  std::vector<float> header = {0.0f, float(1.0 / (4.0 * M_PI)), 0.0f, 0.0f};
   if (!data.constant) distribution = std::make_shared<const EnvironmentDistribution>(buildEnvironmentDistribution(data));
-  std::vector<float> table = distribution ? distribution->table : header;
+  std::vector<uint32_t> table = distribution ? distribution->table : EnvironmentDistribution::constantHeader();
   ImageSpec tableSpec;
-  const uint32_t entries = static_cast<uint32_t>(table.size() / 4);
+  const uint32_t entries = static_cast<uint32_t>(table.size() / 2);
   tableSpec.width = std::min(entries, kEnvironmentTableWidth);
   tableSpec.height = (entries + kEnvironmentTableWidth - 1) / kEnvironmentTableWidth;
-  tableSpec.format = VK_FORMAT_R32G32B32A32_SFLOAT;
+  tableSpec.format = VK_FORMAT_R32G32_UINT;
   tableSpec.usage = VK_IMAGE_USAGE_SAMPLED_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT;
-  table.resize(size_t(tableSpec.width) * tableSpec.height * 4, 0.0f);  // the last row padded
+  table.resize(size_t(tableSpec.width) * tableSpec.height * 2, 0u);  // the last row padded
   auto tableImage = Image::create(*ctx_, tableSpec);
   if (!tableImage) return tableImage.takeError();
-  BRDFA_TRY(uploadImage(*ctx_, *tableImage, table.data(), table.size() * sizeof(float)));
+  BRDFA_TRY(uploadImage(*ctx_, *tableImage, table.data(), table.size() * sizeof(uint32_t)));
   auto env = std::make_shared<GpuEnvironment>();
   env->name = name;
   env->constant = data.constant;

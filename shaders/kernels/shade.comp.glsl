@@ -141,34 +141,44 @@ void main() {
     // and contribute 0; the BRDF is not evaluated there.
     vec3 c = NoL > 0.0 ? BRDF(L, V, N, X, Y) * brdfa_environmentUnit(L) * (NoL / pdf) : vec3(0.0);
 #elif defined(BRDFA_SAMPLING_MIS)
-    vec3 L;
-    vec3 f = vec3(0.0);
-    float pdfEnv = 0.0, pdfBrdf = 0.0;
-    if (j * envShare + phase[h] < envShare) {
-      L = brdfa_sampleEnvironment(u, pdfEnv);
-      if (dot(N, L) > 0.0) {
-        f = BRDF(L, V, N, X, Y);
-        pdfBrdf = brdfa_brdfSidePdf(L, V, N, X, Y);
-      }
-    } else {
+    // Written without branches: a CPU device (lavapipe) runs both sides of every if for all
+    // its SIMD lanes, so a branch per strategy would cost both strategies, two table reads and
+    // two BRDF evaluations per sample. Here a sample costs two table reads, one BRDF() and one
+    // density of each side, whichever strategy drew it.
+    bool fromEnv = j * envShare + phase[h] < envShare;
+    // The BRDF side's direction. Its value and density are taken below at whichever direction
+    // is used, so both strategies weigh a direction the same way (the file's sampler returns
+    // the same f and pdf; only its pdf = 0, a rejected draw, is kept).
+    vec3 Lb;
 #if defined(BRDFA_MIS_FILE_SAMPLER)
-      f = sampleBRDF(brdfa_unorm2(u.xy), V, N, X, Y, L, pdfBrdf);
+    float pdfDrawn;
+    sampleBRDF(brdfa_unorm2(u.xy), V, N, X, Y, Lb, pdfDrawn);
+    bool rejected = !fromEnv && !(pdfDrawn > 0.0);
 #else
-      float unusedWeight;
-      vec3 l = brdfa_sampleCosineHemisphere(brdfa_unorm2(u.xy), unusedWeight);
-      L = X * l.x + Y * l.y + N * l.z;
-      pdfBrdf = l.z / BRDFA_PI;
-      f = BRDF(L, V, N, X, Y);
+    float unusedWeight;
+    vec3 l = brdfa_sampleCosineHemisphere(brdfa_unorm2(u.xy), unusedWeight);
+    Lb = X * l.x + Y * l.y + N * l.z;
+    bool rejected = false;
 #endif
-      // guard: a rejected draw (pdf 0) contributes 0 and needs no environment density.
-      pdfEnv = pdfBrdf > 0.0 ? brdfa_environmentPdf(L) : 0.0;
-    }
+    // Both strategies' directions, then one density read for the one used: the alias step
+    // reads the picked cell's entry, the density read the entry of the cell L lies in. A
+    // BRDF-side sample's alias step reads cell 0 instead of a random cell: its result is not
+    // used, and the table's random reads are what costs on a CPU (cache misses).
+    uint cellE = brdfa_environmentAliasStep(fromEnv ? brdfa_environmentPick(u.x) : 0u, u.y);
+    float majorE, majorB;
+    vec3 Le = brdfa_environmentCellPoint(cellE, u.zw, majorE);
+    uint cellB = brdfa_environmentCell(Lb, majorB);
+    vec3 L = fromEnv ? Le : Lb;
+    float pdfEnv = brdfa_environmentCellPdf(fromEnv ? cellE : cellB, fromEnv ? majorE : majorB);
+    vec3 f = BRDF(L, V, N, X, Y);
+    float pdfBrdf = brdfa_brdfSidePdf(L, V, N, X, Y);
     float NoL = dot(N, L);
     // The balance heuristic over the mixture: f L cos / ((1 - c) p_brdf + c p_env). The
     // environment's density is never 0 (its table has a floor), so neither is the sum where
-    // NoL > 0.
-    vec3 c = NoL > 0.0 && (pdfBrdf > 0.0 || pdfEnv > 0.0)
-                 ? f * brdfa_environmentUnit(L) * (NoL / (cBrdf * pdfBrdf + cEnv * pdfEnv))
+    // NoL > 0. Directions below the horizon (drawn from the map, or rejected by the file's
+    // sampler) contribute 0 whatever BRDF() returned there.
+    vec3 c = NoL > 0.0 && !rejected
+                 ? f * brdfa_environmentUnit(L) * (NoL / (cBrdf * max(pdfBrdf, 0.0) + cEnv * pdfEnv))  // guard: a user pdf < 0
                  : vec3(0.0);
 #else
     float weight;  // cos / pdf

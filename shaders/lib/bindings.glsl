@@ -20,11 +20,11 @@ layout(std430, set = 0, binding = 6) writeonly buffer BrdfaOutRgba8 { uint brdfa
 layout(std430, set = 0, binding = 7) writeonly buffer BrdfaOutFloat { vec4 brdfa_outFloat[]; };
 layout(std430, set = 0, binding = 8) writeonly buffer BrdfaPartials { vec4 brdfa_partials[]; };
 // The environment's importance-sampling table (renderer/src/environment_sampling.h), 4096
-// entries per row of an RGBA32F image read with texelFetch: entry 0 (cells per face edge D,
-// effective density, log2 D, 0), then per cell (q, alias, density, alias's density). A
-// constant environment binds a header with D = 0.
-layout(set = 0, binding = 9) uniform sampler2D brdfa_envTable;
-vec4 brdfa_envEntry(uint i) { return texelFetch(brdfa_envTable, ivec2(i & 4095u, i >> 12u), 0); }
+// entries per row of an RG32UI image read with texelFetch: entry 0 (log2 D, effective density
+// as float bits), then per cell (alias << 13 | keep threshold, density as float bits). A
+// constant environment binds the header alone.
+layout(set = 0, binding = 9) uniform usampler2D brdfa_envTable;
+uvec2 brdfa_envEntry(uint i) { return texelFetch(brdfa_envTable, ivec2(i & 4095u, i >> 12u), 0).xy; }
 
 layout(push_constant) uniform BrdfaPush {
   vec4 cameraPos;      // xyz

@@ -38,33 +38,70 @@ float brdfa_envD = 0.0;    // cells per face edge
 
 void brdfa_environmentBegin() {
 #if !defined(BRDFA_ENV_CONSTANT)
-  vec4 header = brdfa_envEntry(0u);
-  brdfa_envD = header.x;
-  brdfa_envLog2D = uint(header.z);
+  brdfa_envLog2D = brdfa_envEntry(0u).x;
+  brdfa_envD = float(1u << brdfa_envLog2D);
 #endif
 }
 
-// Density in solid angle of brdfa_sampleEnvironment's draws at unit direction `d`:
-// density(cell) / |d_major|^3 (environment_sampling.h derives it).
-float brdfa_environmentPdf(vec3 d) {
-#if defined(BRDFA_ENV_CONSTANT)
-  return 1.0 / (4.0 * BRDFA_PI);
-#else
+#if !defined(BRDFA_ENV_CONSTANT)
+// The cell holding unit direction `d`, and |d_major|. Total for any d, NaN included: the index
+// is clamped into the table, so a user sampler's garbage direction never reads past it.
+uint brdfa_environmentCell(vec3 d, out float major) {
   vec2 st;
-  float major;
   uint face = brdfa_cubeFaceCoords(d, st, major);
   uint last = (1u << brdfa_envLog2D) - 1u;
   // guard: s or t at exactly +1 (the face's far edge) would index one cell past the row.
   uvec2 cell = min(uvec2(max((st + 1.0) * (0.5 * brdfa_envD), vec2(0.0))), uvec2(last));
-  uint index = (((face << brdfa_envLog2D) + cell.y) << brdfa_envLog2D) + cell.x;
-  return brdfa_envEntry(1u + index).z / (major * major * major);
+  return (((face << brdfa_envLog2D) + cell.y) << brdfa_envLog2D) + cell.x;
+}
+
+// The cell that 32 random bits pick uniformly: the first step of the alias method. All 32 bits
+// count, so the pick is uniform over the cells to 1 part in 2^32 / cells.
+uint brdfa_environmentPick(uint bits) {
+  uint cell, unused;
+  umulExtended(bits, 6u << (2u * brdfa_envLog2D), cell, unused);  // floor(bits * cells / 2^32)
+  return cell;
+}
+
+// The second step: keep the picked cell when the top 13 random bits are below its threshold k
+// (probability k / 8192), else take its alias (environment_sampling.h).
+uint brdfa_environmentAliasStep(uint picked, uint bits) {
+  uint word = brdfa_envEntry(1u + picked).x;
+  return (bits >> 19u) < (word & 0x1fffu) ? picked : word >> 13u;
+}
+
+// A point drawn uniformly in (s, t) inside cell `cell`, as a unit direction, and its |d_major|.
+// D is a power of two, so the cell index splits with shifts.
+vec3 brdfa_environmentCellPoint(uint cell, uvec2 u, out float major) {
+  uint last = (1u << brdfa_envLog2D) - 1u;
+  uint face = cell >> (2u * brdfa_envLog2D);
+  uvec2 c = uvec2(cell & last, (cell >> brdfa_envLog2D) & last);
+  vec2 st = (vec2(c) + brdfa_unorm2(u)) * (2.0 / brdfa_envD) - 1.0;
+  vec3 d = brdfa_cubeFacePoint(face, st);
+  major = inversesqrt(dot(d, d));  // 1 / sqrt(1 + s^2 + t^2): d's major component is +-1
+  return d * major;
+}
+
+// Density in solid angle of the draws at a direction in cell `cell` whose major component is
+// `major`: density(cell) / |d_major|^3 (environment_sampling.h derives it).
+float brdfa_environmentCellPdf(uint cell, float major) {
+  return uintBitsToFloat(brdfa_envEntry(1u + cell).y) / (major * major * major);
+}
+#endif
+
+// Density in solid angle of brdfa_sampleEnvironment's draws at unit direction `d`.
+float brdfa_environmentPdf(vec3 d) {
+#if defined(BRDFA_ENV_CONSTANT)
+  return 1.0 / (4.0 * BRDFA_PI);
+#else
+  float major;
+  uint cell = brdfa_environmentCell(d, major);
+  return brdfa_environmentCellPdf(cell, major);
 #endif
 }
 
-// Draws a unit direction from the environment's distribution and sets its solid-angle density.
-// u.x picks a cell (all 32 bits: the pick is uniform over the cells to 1 part in 2^32 / cells),
-// u.y decides between the cell and its alias, u.zw place the point in the cell uniformly in
-// (s, t). D is a power of two, so the cell index splits with shifts.
+// Draws a unit direction from the environment's distribution and sets its solid-angle density:
+// u.x picks a cell, u.y decides between it and its alias, u.zw place the point in the cell.
 vec3 brdfa_sampleEnvironment(uvec4 u, out float pdf) {
 #if defined(BRDFA_ENV_CONSTANT)
   float z = 1.0 - 2.0 * brdfa_unorm(u.x);
@@ -73,22 +110,11 @@ vec3 brdfa_sampleEnvironment(uvec4 u, out float pdf) {
   pdf = 1.0 / (4.0 * BRDFA_PI);
   return vec3(r * cos(phi), r * sin(phi), z);
 #else
-  uint cell, unused;
-  umulExtended(u.x, 6u << (2u * brdfa_envLog2D), cell, unused);  // floor(u.x * cells / 2^32)
-  vec4 e = brdfa_envEntry(1u + cell);
-  float density = e.z;
-  if (brdfa_unorm(u.y) >= e.x) {
-    cell = uint(e.y);
-    density = e.w;
-  }
-  uint last = (1u << brdfa_envLog2D) - 1u;
-  uint face = cell >> (2u * brdfa_envLog2D);
-  uvec2 c = uvec2(cell & last, (cell >> brdfa_envLog2D) & last);
-  vec2 st = (vec2(c) + brdfa_unorm2(u.zw)) * (2.0 / brdfa_envD) - 1.0;
-  vec3 d = brdfa_cubeFacePoint(face, st);
-  float r2 = dot(d, d);  // 1 + s^2 + t^2 >= 1
-  pdf = density * r2 * sqrt(r2);
-  return d * inversesqrt(r2);
+  uint cell = brdfa_environmentAliasStep(brdfa_environmentPick(u.x), u.y);
+  float major;
+  vec3 d = brdfa_environmentCellPoint(cell, u.zw, major);
+  pdf = brdfa_environmentCellPdf(cell, major);
+  return d;
 #endif
 }
 
@@ -97,6 +123,6 @@ float brdfa_environmentConcentration() {
 #if defined(BRDFA_ENV_CONSTANT)
   return 1.0 / (4.0 * BRDFA_PI);
 #else
-  return brdfa_envEntry(0u).y;
+  return uintBitsToFloat(brdfa_envEntry(0u).y);
 #endif
 }
