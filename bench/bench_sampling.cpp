@@ -98,7 +98,7 @@ int runSamplingBench(const std::string& sourceDir, int rounds, const std::string
               kSize, kSize, kBudgetMs, kReferenceMs / 2, rounds);
   std::printf("| %-28s | %-11s | %-24s | %8s | %10s | %12s | %s\n", "scene", "strategy", "estimator", "spp",
               "M samples/s", "relMSE", "relMSE cosine / this");
-  bool allWithin2x = true;
+  bool allWithin2x = true, allFastEnough = true;
   for (const BenchScene& b : scenes) {
     // The references: mis for kReferenceMs / 2 each, seeds 1 and 2.
     Reference ref;
@@ -126,6 +126,7 @@ int runSamplingBench(const std::string& sourceDir, int rounds, const std::string
     }
     std::map<SamplingMode, std::vector<double>> mse, ratio, rate, spp;
     std::map<SamplingMode, std::string> estimator;
+    std::vector<double> throughput;  // mis samples/s over cosine's, per round
     for (int round = 0; round < rounds; ++round) {
       std::map<SamplingMode, std::unique_ptr<RenderView>> views;
       for (SamplingMode m : modes) {
@@ -150,6 +151,7 @@ int runSamplingBench(const std::string& sourceDir, int rounds, const std::string
         estimator[m] = f.stats.estimator;
       }
       for (SamplingMode m : modes) ratio[m].push_back(mse[SamplingMode::Cosine].back() / mse[m].back());
+      throughput.push_back(rate[SamplingMode::Mis].back() / rate[SamplingMode::Cosine].back());
     }
     const size_t pixels = lumPixels / 2;
     double best = 0;
@@ -162,8 +164,12 @@ int runSamplingBench(const std::string& sourceDir, int rounds, const std::string
     const double mis = median(ratio[SamplingMode::Mis]);
     std::printf("|   mis against the best single strategy: %.2fx worse (target <= 2)\n", best / mis);
     allWithin2x = allWithin2x && best / mis <= 2.0;
+    const double misRate = median(throughput);
+    std::printf("|   mis samples/s: %.0f %% of cosine's (target >= 50 %%)\n", 100.0 * misRate);
+    allFastEnough = allFastEnough && misRate >= 0.5;
   }
   std::printf("mis within 2x of the best single strategy in every scene: %s\n", allWithin2x ? "yes" : "NO");
+  std::printf("mis samples/s at least 50 %% of cosine's in every scene: %s\n", allFastEnough ? "yes" : "NO");
   return 0;
 }
 
