@@ -182,12 +182,13 @@ Result<void> RendererImpl::runCheckKernel(const BrdfDefinition& brdf, const char
   // Set 0 carries the output in the accumulator binding (3); set 1 the parameter block.
   PoolOwner res;
   res.device = ctx.device();
-  VkDescriptorPoolSize sizes[3] = {{VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 6},
-                                   {VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, 6},
-                                   {VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, 2}};
+  VkDescriptorPoolSize sizes[4] = {{VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 6},
+                                   {VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, 5},
+                                   {VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, 2},
+                                   {VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER, 1}};
   VkDescriptorPoolCreateInfo pci{VK_STRUCTURE_TYPE_DESCRIPTOR_POOL_CREATE_INFO};
   pci.maxSets = 2;
-  pci.poolSizeCount = 3;
+  pci.poolSizeCount = 4;
   pci.pPoolSizes = sizes;
   BRDFA_VK_TRY(vkCreateDescriptorPool(ctx.device(), &pci, nullptr, &res.pool));
   VkDescriptorSetLayout layouts[2] = {viewSetLayout_, objectSetLayout_};
@@ -206,13 +207,13 @@ Result<void> RendererImpl::runCheckKernel(const BrdfDefinition& brdf, const char
   VkDescriptorBufferInfo paramInfo{params->handle(), 0, VK_WHOLE_SIZE};
   if (!env) env = furnace->get();
   VkDescriptorImageInfo envInfo{envSampler_, env->cube.view(), VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL};
-  VkDescriptorImageInfo tableInfo{tableSampler_, env->table.view(), VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL};
+  const VkBufferView tableView = env->table.view();
   std::vector<VkWriteDescriptorSet> writes;
   for (uint32_t binding : {0u, 3u, 4u, 6u, 7u, 8u})
     writes.push_back({VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET, nullptr, sets[0], binding, 0, 1,
                       VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, nullptr, binding == 0 ? &inInfo : &outInfo, nullptr});
   writes.push_back({VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET, nullptr, sets[0], 9, 0, 1,
-                    VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, &tableInfo, nullptr, nullptr});
+                    VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER, nullptr, nullptr, &tableView});
   writes.push_back({VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET, nullptr, sets[0], 5, 0, 1,
                     VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, &envInfo, nullptr, nullptr});
   for (uint32_t binding : {0u, 1u})

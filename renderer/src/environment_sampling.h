@@ -59,6 +59,8 @@ struct EnvironmentDistribution {
 // random, and on lavapipe (2-core EPYC, 1 MiB L2) a 256 table (3 MiB) ran mis at 48 % of
 // cosine's samples/s, a 128 table at 51 %, with equal or lower error at equal time in every
 // bench scene (a 0.7-degree cell still holds most of a small sun's light).
-EnvironmentDistribution buildEnvironmentDistribution(const EnvironmentData& env, uint32_t maxCellsPerEdge = 128);
+inline constexpr uint32_t kMaxCellsPerEdge = 128;
+EnvironmentDistribution buildEnvironmentDistribution(const EnvironmentData& env,
+                                                     uint32_t maxCellsPerEdge = kMaxCellsPerEdge);
 
 }  // namespace brdfa

@@ -23,20 +23,19 @@ struct GpuMesh {
   uint32_t indexCount = 0;
 };
 
-inline constexpr uint32_t kEnvironmentTableWidth = 4096;  // BRDFA_ENV_TABLE_WIDTH_LOG2 = 12 in the GLSL
 
 struct GpuEnvironment {
   std::string name;
   bool constant = false;
   float scale = 1.0f;  // radiance = texel * scale (packHalfCube); folded into the intensity push constant
   Image cube;  // RGBA16F, SHADER_READ_ONLY_OPTIMAL
-  // Importance-sampling table (environment_sampling.h) as an RG32UI image of
-  // kEnvironmentTableWidth texels per row, read with texelFetch at set 0 binding 9. On a CPU
-  // device a texel fetch is a SIMD gather, far cheaper than a storage-buffer load (one
-  // bounds-checked load per lane), and a 64-bit texel far cheaper than a 128-bit one (on
-  // lavapipe mis ran at 24 M samples/s with RGBA32F entries, 38 with RG32). A constant
-  // environment has only the header.
-  Image table;
+  // Importance-sampling table (environment_sampling.h): a uniform texel buffer of RG32UI
+  // entries, read with texelFetch at set 0 binding 9. Its reads are random, and on a CPU device
+  // (lavapipe) they were most of a mis sample's cost: a texel buffer's fetch skips the 2D
+  // addressing of an image, and 64-bit entries cost less than 128-bit ones (bench --only
+  // sampling: mis at 38-45 % of cosine's samples/s with an RGBA32F image, 51-54 % with an
+  // RG32UI image, 54-57 % with this buffer). A constant environment has only the header.
+  TexelBuffer table;
   std::shared_ptr<const EnvironmentDistribution> distribution;  // the same table on the host; null when constant
 };
 

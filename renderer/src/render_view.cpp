@@ -65,13 +65,14 @@ Result<void> RenderViewImpl::init() {
   cmd_ = std::move(cmd.value());
 
   // New objects are built before the old ones are released, hence room for two scenes' worth.
-  VkDescriptorPoolSize sizes[3] = {{VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 6 * kMaxJitter},
-                                   {VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, 2 * kMaxJitter + 8 * kMaxObjects},
-                                   {VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, 4 * kMaxObjects}};
+  VkDescriptorPoolSize sizes[4] = {{VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 6 * kMaxJitter},
+                                   {VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, kMaxJitter + 8 * kMaxObjects},
+                                   {VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, 4 * kMaxObjects},
+                                   {VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER, kMaxJitter}};
   VkDescriptorPoolCreateInfo pci{VK_STRUCTURE_TYPE_DESCRIPTOR_POOL_CREATE_INFO};
   pci.flags = VK_DESCRIPTOR_POOL_CREATE_FREE_DESCRIPTOR_SET_BIT;
   pci.maxSets = kMaxJitter + 2 * kMaxObjects;
-  pci.poolSizeCount = 3;
+  pci.poolSizeCount = 4;
   pci.pPoolSizes = sizes;
   BRDFA_VK_TRY(vkCreateDescriptorPool(ctx.device(), &pci, nullptr, &pool_));
   VkDescriptorSetLayout layouts[kMaxJitter];
@@ -159,7 +160,7 @@ Result<void> RenderViewImpl::resize(uint32_t width, uint32_t height) {
 
 void RenderViewImpl::writeViewDescriptors() {
   VkDescriptorImageInfo env{r_->environmentSampler(), env_->cube.view(), VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL};
-  VkDescriptorImageInfo table{r_->tableSampler(), env_->table.view(), VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL};
+  const VkBufferView table = env_->table.view();
   const std::pair<uint32_t, const Buffer*> buffers[6] = {{0, &gbuffer_},  {3, &accum_},    {4, &counters_},
                                                          {6, &outRgba8_}, {7, &outFloat_}, {8, &partials_}};
   const VkDeviceSize sliceBytes = VkDeviceSize(width_) * height_ * 3 * 16;
@@ -184,8 +185,8 @@ void RenderViewImpl::writeViewDescriptors() {
     w[6].descriptorType = VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER;
     w[6].pImageInfo = &env;
     w[7].dstBinding = 9;
-    w[7].descriptorType = VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER;
-    w[7].pImageInfo = &table;
+    w[7].descriptorType = VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER;
+    w[7].pTexelBufferView = &table;
     vkUpdateDescriptorSets(r_->ctx().device(), 8, w, 0, nullptr);
   }
 }

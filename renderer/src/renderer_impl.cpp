@@ -84,11 +84,7 @@ Result<void> RendererImpl::init(const RendererOptions& options) {
 
   sci.addressModeU = sci.addressModeV = sci.addressModeW = VK_SAMPLER_ADDRESS_MODE_REPEAT;
   BRDFA_VK_TRY(vkCreateSampler(ctx_->device(), &sci, nullptr, &textureSampler_));
-  // The sampling table is integer and read with texelFetch: a nearest sampler, since integer
-  // formats have no linear filtering.
-  sci.magFilter = sci.minFilter = VK_FILTER_NEAREST;
-  sci.addressModeU = sci.addressModeV = sci.addressModeW = VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_EDGE;
-  BRDFA_VK_TRY(vkCreateSampler(ctx_->device(), &sci, nullptr, &tableSampler_));
+
   ImageSpec white;
   white.format = VK_FORMAT_R8G8B8A8_UNORM;
   white.usage = VK_IMAGE_USAGE_SAMPLED_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT;
@@ -131,7 +127,6 @@ RendererImpl::~RendererImpl() {
   backgroundCube_.reset();
   if (envSampler_) vkDestroySampler(d, envSampler_, nullptr);
   if (textureSampler_) vkDestroySampler(d, textureSampler_, nullptr);
-  if (tableSampler_) vkDestroySampler(d, tableSampler_, nullptr);
   whiteTexture_ = Image();
   if (gbufferPipeline_) vkDestroyPipeline(d, gbufferPipeline_, nullptr);
   if (gbufferPass_) vkDestroyRenderPass(d, gbufferPass_, nullptr);
@@ -149,7 +144,7 @@ Result<void> RendererImpl::createLayouts() {
       {0, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER},  {3, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER},
       {4, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER},  {5, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER},
       {6, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER},  {7, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER},
-      {8, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER},  {9, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER}}};
+      {8, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER},  {9, VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER}}};
   std::array<VkDescriptorSetLayoutBinding, 8> view{};
   for (size_t i = 0; i < view.size(); ++i)
     view[i] = {viewBindings[i].first, viewBindings[i].second, 1, VK_SHADER_STAGE_COMPUTE_BIT, nullptr};
@@ -642,24 +637,22 @@ Result<std::shared_ptr<GpuEnvironment>> RendererImpl::uploadEnvironment(const st
   const HalfCube half = packHalfCube(data);
   BRDFA_TRY(uploadImage(*ctx_, *image, half.texels.data(), half.texels.size() * sizeof(uint16_t)));
   std::shared_ptr<const EnvironmentDistribution> distribution;
-  if (!data.constant) distribution = std::make_shared<const EnvironmentDistribution>(buildEnvironmentDistribution(data));
+  if (!data.constant) {
+    // The table is a texel buffer, and Vulkan only promises 65536 texels in one: a device at that
+    // minimum gets coarser cells (6 D^2 + 1 entries must fit).
+    uint32_t maxCells = kMaxCellsPerEdge;
+    while (maxCells > 1 && 6ull * maxCells * maxCells + 1 > ctx_->limits().maxTexelBufferElements) maxCells /= 2;
+    distribution = std::make_shared<const EnvironmentDistribution>(buildEnvironmentDistribution(data, maxCells));
+  }
   std::vector<uint32_t> table = distribution ? distribution->table : EnvironmentDistribution::constantHeader();
-  ImageSpec tableSpec;
-  const uint32_t entries = static_cast<uint32_t>(table.size() / 2);
-  tableSpec.width = std::min(entries, kEnvironmentTableWidth);
-  tableSpec.height = (entries + kEnvironmentTableWidth - 1) / kEnvironmentTableWidth;
-  tableSpec.format = VK_FORMAT_R32G32_UINT;
-  tableSpec.usage = VK_IMAGE_USAGE_SAMPLED_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT;
-  table.resize(size_t(tableSpec.width) * tableSpec.height * 2, 0u);  // the last row padded
-  auto tableImage = Image::create(*ctx_, tableSpec);
-  if (!tableImage) return tableImage.takeError();
-  BRDFA_TRY(uploadImage(*ctx_, *tableImage, table.data(), table.size() * sizeof(uint32_t)));
+  auto tableBuffer = TexelBuffer::create(*ctx_, table.data(), table.size() * sizeof(uint32_t), VK_FORMAT_R32G32_UINT);
+  if (!tableBuffer) return tableBuffer.takeError();
   auto env = std::make_shared<GpuEnvironment>();
   env->name = name;
   env->constant = data.constant;
   env->scale = half.scale;
   env->cube = std::move(image.value());
-  env->table = std::move(tableImage.value());
+  env->table = std::move(tableBuffer.value());
   env->distribution = std::move(distribution);
   return env;
 }

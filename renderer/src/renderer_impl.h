@@ -63,7 +63,6 @@ class RendererImpl final : public Renderer, public std::enable_shared_from_this<
     return (constantEnv ? backgroundConstant_ : backgroundCube_)->pipeline();
   }
   VkSampler environmentSampler() const { return envSampler_; }
-  VkSampler tableSampler() const { return tableSampler_; }  // nearest, for the sampling table
   // Binds the 1x1 white texture to the four texture slots (set 1, bindings 2..5) of `objectSet`:
   // every slot of a bound set must hold a valid image (see brdf_check.cpp).
   void writeDefaultTextures(VkDescriptorSet objectSet) const;
@@ -117,7 +116,6 @@ class RendererImpl final : public Renderer, public std::enable_shared_from_this<
   VkPipeline gbufferPipeline_ = VK_NULL_HANDLE;
   VkSampler envSampler_ = VK_NULL_HANDLE;
   VkSampler textureSampler_ = VK_NULL_HANDLE;  // iTexture0..3: linear, repeating
-  VkSampler tableSampler_ = VK_NULL_HANDLE;    // environment sampling tables: nearest
   Image whiteTexture_;                          // 1x1 RGBA8 (1, 1, 1, 1): an unbound texture slot
   std::unique_ptr<ComputeKernel> resolve_, backgroundConstant_, backgroundCube_;
   bool hostResolve_ = false;

@@ -29,7 +29,8 @@ void Buffer::reset() {
   size_ = 0;
 }
 
-Result<Buffer> Buffer::create(VkContext& ctx, VkDeviceSize size, VkBufferUsageFlags usage, bool hostVisible) {
+Result<Buffer> Buffer::create(VkContext& ctx, VkDeviceSize size, VkBufferUsageFlags usage, bool hostVisible,
+                              bool preferDeviceLocal) {
   Buffer b;
   b.device_ = ctx.device();
   b.size_ = size;
@@ -43,7 +44,8 @@ Result<Buffer> Buffer::create(VkContext& ctx, VkDeviceSize size, VkBufferUsageFl
   auto type = hostVisible
                   ? ctx.findMemoryType(req.memoryTypeBits,
                                        VK_MEMORY_PROPERTY_HOST_VISIBLE_BIT | VK_MEMORY_PROPERTY_HOST_COHERENT_BIT,
-                                       VK_MEMORY_PROPERTY_HOST_CACHED_BIT)
+                                       preferDeviceLocal ? VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT
+                                                         : VK_MEMORY_PROPERTY_HOST_CACHED_BIT)
                   : ctx.findMemoryType(req.memoryTypeBits, VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT);
   if (!type) return type.takeError();
   VkMemoryAllocateInfo mai{VK_STRUCTURE_TYPE_MEMORY_ALLOCATE_INFO};
@@ -53,6 +55,39 @@ Result<Buffer> Buffer::create(VkContext& ctx, VkDeviceSize size, VkBufferUsageFl
   BRDFA_VK_TRY(vkBindBufferMemory(b.device_, b.buffer_, b.memory_, 0));
   if (hostVisible) BRDFA_VK_TRY(vkMapMemory(b.device_, b.memory_, 0, VK_WHOLE_SIZE, 0, &b.mapped_));
   return b;
+}
+
+TexelBuffer& TexelBuffer::operator=(TexelBuffer&& o) noexcept {
+  if (this != &o) {
+    reset();
+    buffer_ = std::move(o.buffer_);
+    std::swap(device_, o.device_);
+    std::swap(view_, o.view_);
+  }
+  return *this;
+}
+
+void TexelBuffer::reset() {
+  if (device_ && view_) vkDestroyBufferView(device_, view_, nullptr);
+  view_ = VK_NULL_HANDLE;
+  device_ = VK_NULL_HANDLE;
+  buffer_.reset();
+}
+
+Result<TexelBuffer> TexelBuffer::create(VkContext& ctx, const void* data, VkDeviceSize bytes, VkFormat format) {
+  TexelBuffer t;
+  auto buffer = Buffer::create(ctx, bytes, VK_BUFFER_USAGE_UNIFORM_TEXEL_BUFFER_BIT, true, true);
+  if (!buffer) return buffer.takeError();
+  t.buffer_ = std::move(buffer.value());
+  std::memcpy(t.buffer_.mapped(), data, bytes);
+  t.device_ = ctx.device();
+  VkBufferViewCreateInfo vci{VK_STRUCTURE_TYPE_BUFFER_VIEW_CREATE_INFO};
+  vci.buffer = t.buffer_.handle();
+  vci.format = format;
+  vci.offset = 0;
+  vci.range = VK_WHOLE_SIZE;
+  BRDFA_VK_TRY(vkCreateBufferView(t.device_, &vci, nullptr, &t.view_));
+  return t;
 }
 
 Image& Image::operator=(Image&& o) noexcept {

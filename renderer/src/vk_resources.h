@@ -18,8 +18,11 @@ class Buffer {
   Buffer(Buffer&& o) noexcept { *this = std::move(o); }
   Buffer& operator=(Buffer&& o) noexcept;
 
-  // Host-visible buffers are persistently mapped (mapped() != nullptr) and host-coherent.
-  static Result<Buffer> create(VkContext& ctx, VkDeviceSize size, VkBufferUsageFlags usage, bool hostVisible);
+  // Host-visible buffers are persistently mapped (mapped() != nullptr) and host-coherent, in
+  // host-cached memory where there is one, or device-local memory with `preferDeviceLocal`
+  // (what the device reads often and the host writes once).
+  static Result<Buffer> create(VkContext& ctx, VkDeviceSize size, VkBufferUsageFlags usage, bool hostVisible,
+                               bool preferDeviceLocal = false);
 
   VkBuffer handle() const { return buffer_; }
   VkDeviceSize size() const { return size_; }
@@ -32,6 +35,26 @@ class Buffer {
   VkDeviceMemory memory_ = VK_NULL_HANDLE;
   VkDeviceSize size_ = 0;
   void* mapped_ = nullptr;
+};
+
+// A read-only uniform texel buffer: memory the host fills once at creation, seen by shaders
+// through a view of `format` (a samplerBuffer / usamplerBuffer read with texelFetch).
+class TexelBuffer {
+ public:
+  TexelBuffer() = default;
+  ~TexelBuffer() { reset(); }
+  TexelBuffer(TexelBuffer&& o) noexcept { *this = std::move(o); }
+  TexelBuffer& operator=(TexelBuffer&& o) noexcept;
+
+  static Result<TexelBuffer> create(VkContext& ctx, const void* data, VkDeviceSize bytes, VkFormat format);
+
+  VkBufferView view() const { return view_; }
+  void reset();
+
+ private:
+  Buffer buffer_;
+  VkDevice device_ = VK_NULL_HANDLE;
+  VkBufferView view_ = VK_NULL_HANDLE;
 };
 
 struct ImageSpec {

@@ -19,12 +19,12 @@ layout(set = 0, binding = 5) uniform samplerCube brdfa_envMap;
 layout(std430, set = 0, binding = 6) writeonly buffer BrdfaOutRgba8 { uint brdfa_outRgba8[]; };
 layout(std430, set = 0, binding = 7) writeonly buffer BrdfaOutFloat { vec4 brdfa_outFloat[]; };
 layout(std430, set = 0, binding = 8) writeonly buffer BrdfaPartials { vec4 brdfa_partials[]; };
-// The environment's importance-sampling table (renderer/src/environment_sampling.h), 4096
-// entries per row of an RG32UI image read with texelFetch: entry 0 (log2 D, effective density
-// as float bits), then per cell (alias << 13 | keep threshold, density as float bits). A
-// constant environment binds the header alone.
-layout(set = 0, binding = 9) uniform usampler2D brdfa_envTable;
-uvec2 brdfa_envEntry(uint i) { return texelFetch(brdfa_envTable, ivec2(i & 4095u, i >> 12u), 0).xy; }
+// The environment's importance-sampling table (renderer/src/environment_sampling.h), a texel
+// buffer of RG32UI entries: entry 0 (log2 D, effective density as float bits), then per cell
+// (alias << 13 | keep threshold, density as float bits). A constant environment binds the
+// header alone.
+layout(set = 0, binding = 9) uniform usamplerBuffer brdfa_envTable;
+uvec2 brdfa_envEntry(uint i) { return texelFetch(brdfa_envTable, int(i)).xy; }
 
 layout(push_constant) uniform BrdfaPush {
   vec4 cameraPos;      // xyz
