@@ -7,7 +7,7 @@ BUILD ?= build
 BUILD_TYPE ?= RelWithDebInfo
 JOBS ?= $(shell nproc)
 
-.PHONY: all deps web build run test bench sanitize clean
+.PHONY: all deps web build run test bench soak sanitize clean
 
 all: build
 
@@ -40,6 +40,11 @@ test: build web
 
 bench: build
 	$(BUILD)/bench/brdfa-bench
+
+# Long versions of the stress tests (make test runs each for 30 s): 10 minutes of mixed
+# BRDF/preset traffic from 8 clients against one server.
+soak: build
+	cd $(BUILD) && BRDFA_RACE_SECONDS=600 ctest --output-on-failure -R '^Races\.'
 
 # The test suite under AddressSanitizer + UndefinedBehaviorSanitizer. The Vulkan loader
 # unloads the driver at vkDestroyInstance, which turns the driver's own globals into

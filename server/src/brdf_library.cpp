@@ -173,7 +173,8 @@ std::vector<std::shared_ptr<const BrdfEntry>> BrdfLibrary::list() const {
 }
 
 BrdfLibrary::PutOutcome BrdfLibrary::putUser(std::string name, std::string source,
-                                             std::shared_ptr<const BrdfDefinition> def, Error* storeError) {
+                                             std::shared_ptr<const BrdfDefinition> def, Error* storeError,
+                                             std::shared_ptr<const BrdfEntry>* stored) {
   std::lock_guard store(storeMutex_);
   {
     std::lock_guard lock(mutex_);
@@ -197,6 +198,7 @@ BrdfLibrary::PutOutcome BrdfLibrary::putUser(std::string name, std::string sourc
   auto it = entries_.find(name);
   PutOutcome outcome = it == entries_.end() && !broken_.count(name) ? PutOutcome::Created : PutOutcome::Replaced;
   broken_.erase(name);
+  if (stored) *stored = entry;
   entries_[std::move(name)] = std::move(entry);
   return outcome;
 }
@@ -216,10 +218,23 @@ BrdfLibrary::RemoveOutcome BrdfLibrary::remove(std::string_view name, Error* sto
       return RemoveOutcome::StoreFailed;
     }
   }
-  std::lock_guard lock(mutex_);
-  if (auto it = entries_.find(name); it != entries_.end()) entries_.erase(it);
-  if (auto it = broken_.find(name); it != broken_.end()) broken_.erase(it);
+  {
+    std::lock_guard lock(mutex_);
+    if (auto it = entries_.find(name); it != entries_.end()) entries_.erase(it);
+    if (auto it = broken_.find(name); it != broken_.end()) broken_.erase(it);
+  }
+  // Its presets go with it, still under the store lock, so a later BRDF of the same name
+  // starts without stale ones (the BRDF is gone either way: a leftover preset file is
+  // unreachable until then and is removed by the next remove of that name).
+  if (!presetRoot_.empty()) {
+    std::error_code ec;
+    std::filesystem::remove_all(presetDir(name), ec);
+  }
   return RemoveOutcome::Removed;
+}
+
+std::string BrdfLibrary::presetDir(std::string_view name) const {
+  return (std::filesystem::path(presetRoot_) / std::string(name)).string();
 }
 
 }  // namespace brdfa::server

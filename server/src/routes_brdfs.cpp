@@ -114,12 +114,12 @@ void registerBrdfRoutes(httplib::Server& server, Service& service) {
     Result<Compiled> compiled = parseAndCompile(service, *text);
     if (!compiled) return sendError(res, compiled.error());
     Error storeError;
-    auto outcome = service.library.putUser(name, *text, compiled->definition, &storeError);
+    std::shared_ptr<const BrdfEntry> entry;  // what this PUT stored, even if a DELETE follows at once
+    auto outcome = service.library.putUser(name, *text, compiled->definition, &storeError, &entry);
     if (outcome == BrdfLibrary::PutOutcome::StoreFailed)
       return sendError(res, 500, "storage_error", "cannot save BRDF '" + name + "': " + storeError.message);
     if (outcome == BrdfLibrary::PutOutcome::BuiltinConflict)
       return sendError(res, 409, "conflict", "BRDF '" + name + "' is built in and read-only", "name");
-    auto entry = service.library.find(name);
     nlohmann::json body = brdfEntryToJson(*entry, false);
     body.update(compileReport(compiled.value()));
     sendJson(res, body, outcome == BrdfLibrary::PutOutcome::Created ? 201 : 200);
@@ -130,13 +130,9 @@ void registerBrdfRoutes(httplib::Server& server, Service& service) {
     if (!isValidBrdfName(name)) return sendError(res, 400, "invalid_argument", std::string("BRDF ") + kNameRule, "name");
     Error storeError;
     switch (service.library.remove(name, &storeError)) {
-      case BrdfLibrary::RemoveOutcome::Removed: {
-        // Its presets go with it, so a later BRDF of the same name starts without stale ones.
-        std::error_code ec;
-        std::filesystem::remove_all(service.presetDir(name), ec);
+      case BrdfLibrary::RemoveOutcome::Removed:  // its presets with it (BrdfLibrary::remove)
         res.status = 204;
         return;
-      }
       case BrdfLibrary::RemoveOutcome::StoreFailed:
         return sendError(res, 500, "storage_error", "cannot delete BRDF '" + name + "': " + storeError.message);
       case BrdfLibrary::RemoveOutcome::NotFound:
@@ -152,7 +148,7 @@ void registerBrdfRoutes(httplib::Server& server, Service& service) {
     if (!presetBrdf(service, name, res)) return;
     std::vector<std::string> names;
     std::error_code ec;
-    for (std::filesystem::directory_iterator it(service.presetDir(name), ec), end; !ec && it != end; it.increment(ec)) {
+    for (std::filesystem::directory_iterator it(service.library.presetDir(name), ec), end; !ec && it != end; it.increment(ec)) {
       const std::filesystem::path& path = it->path();
       std::string stem = path.stem().string();
       if (path.extension() == ".json" && isValidBrdfName(stem)) names.push_back(stem);
@@ -167,7 +163,7 @@ void registerBrdfRoutes(httplib::Server& server, Service& service) {
     if (!isValidBrdfName(preset))
       return sendError(res, 400, "invalid_argument", std::string("preset ") + kNameRule, "preset");
     std::string text;
-    if (!readTextFile(std::filesystem::path(service.presetDir(name)) / (preset + ".json"), text))
+    if (!readTextFile(std::filesystem::path(service.library.presetDir(name)) / (preset + ".json"), text))
       return sendError(res, 404, "not_found", "BRDF '" + name + "' has no preset '" + preset + "'", "preset");
     nlohmann::json values = nlohmann::json::parse(text, nullptr, /*allow_exceptions=*/false);
     if (!values.is_object())
@@ -177,37 +173,41 @@ void registerBrdfRoutes(httplib::Server& server, Service& service) {
 
   server.Put("/api/brdfs/([^/]+)/presets/([^/]+)", [&service](const httplib::Request& req, httplib::Response& res) {
     std::string name = req.matches[1], preset = req.matches[2];
-    auto entry = presetBrdf(service, name, res);
-    if (!entry) return;
+    if (!presetBrdf(service, name, res)) return;
     if (!isValidBrdfName(preset))
       return sendError(res, 400, "invalid_argument", std::string("preset ") + kNameRule, "preset");
     auto body = readJsonBody(req, res);
     if (!body) return;
     if (!body->is_object())
       return sendError(res, 400, "invalid_argument", "a preset is a JSON object of parameter values");
-    // Same rules as a scene object's "params"; stored normalized (bools as true/false).
-    nlohmann::json values = nlohmann::json::object();
-    for (auto it = body->begin(); it != body->end(); ++it) {
-      std::string field = "params." + it.key();
-      const BrdfParam* p = entry->definition->findParam(it.key());
-      if (!p) {
-        std::string known;
-        for (const BrdfParam& q : entry->definition->params) known += (known.empty() ? "" : ", ") + q.name;
-        return sendError(res, 400, "invalid_argument",
-                         field + ": BRDF '" + name + "' has no parameter '" + it.key() + "' (known: " + known + ")",
-                         field);
+    // Checked and written against the BRDF the name holds now, with no BRDF store or removal in
+    // between (BrdfLibrary::withEntry).
+    service.library.withEntry(name, [&](std::shared_ptr<const BrdfEntry> entry) {
+      if (!entry) return sendError(res, 404, "not_found", "no BRDF named '" + name + "'", "name");
+      // Same rules as a scene object's "params"; stored normalized (bools as true/false).
+      nlohmann::json values = nlohmann::json::object();
+      for (auto it = body->begin(); it != body->end(); ++it) {
+        std::string field = "params." + it.key();
+        const BrdfParam* p = entry->definition->findParam(it.key());
+        if (!p) {
+          std::string known;
+          for (const BrdfParam& q : entry->definition->params) known += (known.empty() ? "" : ", ") + q.name;
+          return sendError(res, 400, "invalid_argument",
+                           field + ": BRDF '" + name + "' has no parameter '" + it.key() + "' (known: " + known + ")",
+                           field);
+        }
+        Result<Vec3> value = paramValueFromJson(*p, it.value(), field);
+        if (!value) return sendError(res, value.error());
+        values[p->name] = paramValueToJson(p->type, value.value());
       }
-      Result<Vec3> value = paramValueFromJson(*p, it.value(), field);
-      if (!value) return sendError(res, value.error());
-      values[p->name] = paramValueToJson(p->type, value.value());
-    }
-    std::filesystem::path target = std::filesystem::path(service.presetDir(name)) / (preset + ".json");
-    std::error_code ec;
-    bool existed = std::filesystem::exists(target, ec);
-    Result<void> written = writeFileAtomically(target, values.dump(2) + "\n");
-    if (!written)
-      return sendError(res, 500, "storage_error", "cannot save preset '" + preset + "': " + written.error().message);
-    sendJson(res, values, existed ? 200 : 201);
+      std::filesystem::path target = std::filesystem::path(service.library.presetDir(name)) / (preset + ".json");
+      std::error_code ec;
+      bool existed = std::filesystem::exists(target, ec);
+      Result<void> written = writeFileAtomically(target, values.dump(2) + "\n");
+      if (!written)
+        return sendError(res, 500, "storage_error", "cannot save preset '" + preset + "': " + written.error().message);
+      sendJson(res, values, existed ? 200 : 201);
+    });
   });
 
   server.Delete("/api/brdfs/([^/]+)/presets/([^/]+)", [&service](const httplib::Request& req, httplib::Response& res) {
@@ -215,14 +215,18 @@ void registerBrdfRoutes(httplib::Server& server, Service& service) {
     if (!presetBrdf(service, name, res)) return;
     if (!isValidBrdfName(preset))
       return sendError(res, 400, "invalid_argument", std::string("preset ") + kNameRule, "preset");
-    Result<void> removed = removeFileDurably(std::filesystem::path(service.presetDir(name)) / (preset + ".json"));
-    if (removed) {
-      res.status = 204;
-      return;
-    }
-    if (removed.error().code == ErrorCode::NotFound)
-      return sendError(res, 404, "not_found", "BRDF '" + name + "' has no preset '" + preset + "'", "preset");
-    sendError(res, 500, "storage_error", removed.error().message);
+    service.library.withEntry(name, [&](std::shared_ptr<const BrdfEntry> entry) {
+      if (!entry) return sendError(res, 404, "not_found", "no BRDF named '" + name + "'", "name");
+      Result<void> removed =
+          removeFileDurably(std::filesystem::path(service.library.presetDir(name)) / (preset + ".json"));
+      if (removed) {
+        res.status = 204;
+        return;
+      }
+      if (removed.error().code == ErrorCode::NotFound)
+        return sendError(res, 404, "not_found", "BRDF '" + name + "' has no preset '" + preset + "'", "preset");
+      sendError(res, 500, "storage_error", removed.error().message);
+    });
   });
 }
 

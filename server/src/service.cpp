@@ -90,6 +90,7 @@ Result<std::unique_ptr<Service>> Service::create(const ServerConfig& config, std
        service->library.loadBuiltins((std::filesystem::path(config.root) / "shaders" / "brdfs").string()))
     log.push_back("warning: " + msg);
   for (std::string& msg : service->library.loadUserDir(service->userBrdfDir())) log.push_back("warning: " + msg);
+  service->library.setPresetRoot((std::filesystem::path(config.dataDir) / "presets").string());
   service->jobs = std::make_unique<JobManager>(service->renderer);
   if (config.hotLoad) service->hotLoader.start(service->renderer, service->library.list());
 
@@ -129,10 +130,6 @@ size_t Service::maxRequestBody() const {
 }
 
 std::string Service::userBrdfDir() const { return (std::filesystem::path(config.dataDir) / "brdfs").string(); }
-
-std::string Service::presetDir(const std::string& brdf) const {
-  return (std::filesystem::path(config.dataDir) / "presets" / brdf).string();
-}
 
 void Service::beginShutdown() {
   stopping = true;

@@ -61,12 +61,25 @@ class BrdfLibrary {
   // Stores a user BRDF unless a built-in holds that name (built-ins are read-only). With a user
   // store, the file is written atomically first; when that fails (StoreFailed, `storeError` set)
   // nothing changes.
+  // `stored`, when given, receives the entry this call stored (a concurrent remove may already
+  // have taken it out of the library again by the time the caller looks).
   PutOutcome putUser(std::string name, std::string source, std::shared_ptr<const BrdfDefinition> def,
-                     Error* storeError = nullptr);
+                     Error* storeError = nullptr, std::shared_ptr<const BrdfEntry>* stored = nullptr);
 
   enum class RemoveOutcome { Removed, NotFound, Builtin, StoreFailed };
-  // Removes a user BRDF (or a broken one) and its file.
+  // Removes a user BRDF (or a broken one), its file and its presets (<preset root>/<name>).
   RemoveOutcome remove(std::string_view name, Error* storeError = nullptr);
+  // Where presets live: <root>/<brdf name>/<preset>.json. Set once, before serving.
+  void setPresetRoot(std::string root) { presetRoot_ = std::move(root); }
+  std::string presetDir(std::string_view name) const;
+  // Runs op(entry) (entry null when no BRDF holds `name`) while no BRDF is stored or removed:
+  // a preset written or removed in op never interleaves with its BRDF's removal, so a preset
+  // can neither outlive its BRDF nor pass to a later BRDF of the same name.
+  template <class Op>
+  auto withEntry(std::string_view name, Op&& op) {
+    std::lock_guard store(storeMutex_);
+    return op(find(name));
+  }
 
   // <store>/<name>.brdf; empty without a user store.
   std::string userFilePath(std::string_view name) const;
@@ -76,6 +89,7 @@ class BrdfLibrary {
   // Serializes file writes with the map update, so the file on disk and the entry agree.
   std::mutex storeMutex_;
   std::string userDir_;  // set once by loadUserDir, before serving
+  std::string presetRoot_;  // set once by setPresetRoot, before serving; empty: no presets
   std::map<std::string, std::shared_ptr<const BrdfEntry>, std::less<>> entries_;
   std::map<std::string, BrokenBrdf, std::less<>> broken_;
 };

@@ -56,9 +56,9 @@ class RenderSlots {
 };
 
 struct Service {
-  // <dataDir>/brdfs (saved user BRDFs) and <dataDir>/presets/<brdf> (saved parameter sets).
+  // <dataDir>/brdfs (saved user BRDFs); presets live in <dataDir>/presets/<brdf>
+  // (library.presetDir).
   std::string userBrdfDir() const;
-  std::string presetDir(const std::string& brdf) const;
 
   // Opens the device, loads the built-in and saved user BRDFs (parsed only) and sets up the `default` session (its scene is
   // applied lazily, on first use). `log` receives start-up warnings.
