@@ -8,6 +8,7 @@
 #include <filesystem>
 #include <fstream>
 #include <sstream>
+#include <thread>
 
 #include "brdf_features.h"
 #include "environment_maps.h"
@@ -47,6 +48,11 @@ Result<std::shared_ptr<RendererImpl>> RendererImpl::create(const RendererOptions
 
 Result<void> RendererImpl::init(const RendererOptions& options) {
   diskCache_ = std::make_unique<SpirvDiskCache>(options.cacheDir, options.loadCache);
+  const size_t workers = options.compileWorkers > 0
+                             ? options.compileWorkers
+                             : std::max<size_t>(2, std::thread::hardware_concurrency());
+  compilePool_ = std::make_unique<CompilePool>(CompilePool::findWorker(),
+                                               CompileBudget{options.compileSeconds, options.compileMemoryMiB}, workers);
   if (!options.driverCacheDir.empty()) {
     std::error_code ec;
     std::filesystem::create_directories(options.driverCacheDir, ec);
@@ -354,7 +360,7 @@ Result<std::shared_ptr<const SpirvBinary>> RendererImpl::spirv(ShaderStage stage
     return makeError(ErrorCode::NotFound, "program not in the SPIR-V cache");
   } else {
     ++glslCompiles_;
-    auto compiled = compileGlsl(stage, source);
+    auto compiled = compilePool_->compile(stage, source);
     if (!compiled) return compiled.takeError();
     diskCache_->store(key, source.size(), compiled->words);
     shared = std::make_shared<const SpirvBinary>(std::move(compiled.value()));

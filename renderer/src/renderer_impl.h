@@ -12,6 +12,7 @@
 
 #include "brdfa/renderer.h"
 #include "environment_maps.h"
+#include "compile_pool.h"
 #include "glsl_compiler.h"
 #include "image_decode.h"
 #include "meshes.h"
@@ -130,6 +131,7 @@ class RendererImpl final : public Renderer, public std::enable_shared_from_this<
 
   std::atomic<uint64_t> glslCompiles_{0}, spirvCacheHits_{0}, spirvDiskHits_{0}, pipelinesCreated_{0};
   std::unique_ptr<SpirvDiskCache> diskCache_;
+  std::unique_ptr<CompilePool> compilePool_;  // every GLSL compile runs there
 
   // Asset caches. Built-ins are kept for the renderer's life; registered (uploaded) assets
   // only while a view holds them, so large uploads do not pile up in memory.

@@ -55,6 +55,9 @@ std::string usageText(const char* program) {
          "                            uploads)\n"
          "  --max-assets-bytes N      most bytes all kept uploads may take together (default\n"
          "                            4294967296 = 4 GiB)\n"
+         "  --compile-timeout S       seconds one GLSL compile may take (default 5)\n"
+         "  --compile-memory MIB      memory one GLSL compile may use, in MiB (default 1024); a\n"
+         "                            program past either budget is refused with 422\n"
          "  --environment-dir DIR     register every *.exr in DIR that the renderer can read as the\n"
          "                            read-only environment blender_<name>; repeatable (default:\n"
          "                            Debian blender-data's\n"
@@ -146,6 +149,10 @@ ParseOutcome parse_command_line(int argc, const char* const* argv) {
       err = takeInt(0, 1'000'000, config.maxAssets);
     else if (name == "--max-assets-bytes")
       err = takeInt(0, 1ll << 50, config.maxAssetsBytes);
+    else if (name == "--compile-timeout")
+      err = takeInt(1, 600, config.compileTimeoutSec);
+    else if (name == "--compile-memory")
+      err = takeInt(64, 1 << 20, config.compileMemoryMiB);
     else if (name == "--environment-dir") {
       std::string dir;
       err = takeString(dir);

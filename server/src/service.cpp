@@ -72,6 +72,8 @@ Result<std::unique_ptr<Service>> Service::create(const ServerConfig& config, std
   options.cacheDir = (std::filesystem::path(config.dataDir) / "cache" / "spirv").string();
   options.driverCacheDir = (std::filesystem::path(config.dataDir) / "cache" / "mesa").string();
   options.loadCache = config.loadCache;
+  options.compileSeconds = config.compileTimeoutSec;
+  options.compileMemoryMiB = static_cast<size_t>(config.compileMemoryMiB);
   Result<std::shared_ptr<Renderer>> renderer = Renderer::create(options);
   if (!renderer) return renderer.takeError();
   service->renderer = std::move(renderer.value());

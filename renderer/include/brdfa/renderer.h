@@ -30,6 +30,11 @@ struct RendererOptions {
   // Points Mesa's shader disk cache here (sets MESA_SHADER_CACHE_DIR for this process unless it
   // is already set) before the device opens; empty leaves the driver's default.
   std::string driverCacheDir;
+  // GLSL is compiled in brdfa-compile-worker processes, each compile under this budget; past
+  // it the compile fails with a CompileError naming the budget (issue 12).
+  double compileSeconds = 5.0;
+  size_t compileMemoryMiB = 1024;
+  size_t compileWorkers = 0;  // at once; 0: one per core, at least 2
 };
 
 struct DeviceInfo {

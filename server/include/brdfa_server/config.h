@@ -26,6 +26,8 @@ struct ServerConfig {
   uint64_t maxUploadPixels = 16'777'216;      // --max-upload-pixels: width * height of one image
   int maxAssets = 1000;                       // --max-assets: stored uploads (0 disables uploads)
   uint64_t maxAssetsBytes = 4ull << 30;       // --max-assets-bytes: all stored upload files together
+  int compileTimeoutSec = 5;                  // --compile-timeout: one GLSL compile's wall clock
+  int compileMemoryMiB = 1024;                // --compile-memory: one GLSL compile's memory
   // --environment-dir (repeatable): folders whose *.exr become read-only environments
   // `blender_<stem>`. Unset: Debian blender-data's studio-light worlds, when installed.
   std::optional<std::vector<std::string>> environmentDirs;

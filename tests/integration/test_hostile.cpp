@@ -1,0 +1,73 @@
+// Issue 12: the hostile corpus (tests/hostile/) against a real server. Each attack must get its
+// documented answer, and the server must stay healthy and keep serving others meanwhile.
+#include <atomic>
+#include <fstream>
+#include <sstream>
+#include <thread>
+
+#include "server_fixture.h"
+
+namespace brdfa::itest {
+namespace {
+
+std::string hostileFile(const std::string& name) {
+  std::ifstream in(std::string(BRDFA_SOURCE_DIR) + "/tests/hostile/" + name, std::ios::binary);
+  std::ostringstream text;
+  text << in.rdbuf();
+  return text.str();
+}
+
+// A server with a short compile budget, so the attacks end quickly.
+class Hostile : public ServerTest {
+ protected:
+  static void SetUpTestSuite() {
+    server_ = std::make_unique<ServerProcess>();
+    startError_ = server_->start({"--idle-timeout", "3", "--compile-timeout", "2", "--compile-memory", "512"});
+    if (!startError_.empty()) ADD_FAILURE() << "server did not start: " << startError_;
+  }
+};
+
+TEST_F(Hostile, MacroBombIsRefusedAtTheCompileBudgetWhileOtherCompilesGoOn) {
+  const std::string bomb = hostileFile("macro_bomb.brdf");
+  ASSERT_FALSE(bomb.empty());
+  const std::string lambert = hostileFile("../../shaders/brdfs/lambert.brdf");
+  ASSERT_FALSE(lambert.empty());
+
+  std::atomic<int> order{0};
+  int bombDoneAt = 0, otherDoneAt = 0;
+  int bombStatus = 0;
+  std::string bombBody;
+  std::thread attacker([&] {
+    auto client = server_->client(60);
+    auto r = client->Post("/api/brdfs/validate", bomb, "text/plain");
+    bombDoneAt = ++order;
+    if (r) bombStatus = r->status, bombBody = r->body;
+  });
+  // Let the bomb reach a worker, then compile something ordinary beside it. (A program not
+  // compiled before: the SPIR-V cache must not answer for the compiler.)
+  std::this_thread::sleep_for(std::chrono::milliseconds(300));
+  auto other = post("/api/brdfs/validate", lambert + "\n// issue 12 hostile test\n", "text/plain");
+  otherDoneAt = ++order;
+  attacker.join();
+
+  ASSERT_TRUE(other);
+  EXPECT_EQ(other->status, 200) << other->body;
+  EXPECT_FALSE(bodyJson(other).value("cached", true)) << "the ordinary program must really compile";
+  EXPECT_LT(otherDoneAt, bombDoneAt) << "an ordinary compile waited behind the bomb";
+
+  EXPECT_EQ(bombStatus, 422) << bombBody;
+  const nlohmann::json error = nlohmann::json::parse(bombBody, nullptr, false);
+  ASSERT_TRUE(error.is_object()) << bombBody;
+  EXPECT_EQ(error.value("error", ""), "compile_error");
+  EXPECT_NE(error.value("message", "").find("exceeds the compile budget of 2 s / 512 MiB"), std::string::npos)
+      << error.dump();
+  ASSERT_TRUE(error.contains("diagnostics") && !error["diagnostics"].empty());
+
+  // The killed worker is replaced: compiling still works, and so does the bomb's refusal.
+  auto again = post("/api/brdfs/validate", lambert + "\n// once more\n", "text/plain");
+  ASSERT_TRUE(again);
+  EXPECT_EQ(again->status, 200) << again->body;
+}
+
+}  // namespace
+}  // namespace brdfa::itest
