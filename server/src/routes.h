@@ -24,8 +24,11 @@ void registerStaticRoutes(httplib::Server& server, Service& service);  // last: 
 // Parses the body as JSON; on failure answers 400 bad_json and returns nullopt.
 std::optional<nlohmann::json> readJsonBody(const httplib::Request& req, httplib::Response& res);
 
-// The body as .brdf text; on failure (over kMaxBrdfSource, empty) answers and returns nullopt.
-std::optional<std::string> readBrdfTextBody(const httplib::Request& req, httplib::Response& res);
+// The body as .brdf text, whatever its content type (a multipart form: its only part), read
+// through a content-reader route; on failure (over kMaxBrdfSource, empty, unreadable) answers
+// and returns nullopt.
+std::optional<std::string> readBrdfTextBody(const httplib::Request& req, httplib::Response& res,
+                                            const httplib::ContentReader& reader);
 
 // Headers every image response carries.
 void setFrameHeaders(httplib::Response& res, const FrameStats& stats);

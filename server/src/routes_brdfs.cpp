@@ -81,8 +81,9 @@ void registerBrdfRoutes(httplib::Server& server, Service& service) {
   });
 
   // Registered before /api/brdfs/{name} so "validate" is never taken as a name.
-  server.Post("/api/brdfs/validate", [&service](const httplib::Request& req, httplib::Response& res) {
-    auto text = readBrdfTextBody(req, res);
+  server.Post("/api/brdfs/validate", [&service](const httplib::Request& req, httplib::Response& res,
+                                                const httplib::ContentReader& reader) {
+    auto text = readBrdfTextBody(req, res, reader);
     if (!text) return;
     Result<Compiled> compiled = parseAndCompile(service, *text);
     if (!compiled) return sendError(res, compiled.error());
@@ -101,7 +102,8 @@ void registerBrdfRoutes(httplib::Server& server, Service& service) {
     sendError(res, 404, "not_found", "no BRDF named '" + name + "'", "name");
   });
 
-  server.Put("/api/brdfs/([^/]+)", [&service](const httplib::Request& req, httplib::Response& res) {
+  server.Put("/api/brdfs/([^/]+)", [&service](const httplib::Request& req, httplib::Response& res,
+                                               const httplib::ContentReader& reader) {
     std::string name = req.matches[1];
     if (!isValidBrdfName(name))
       return sendError(res, 400, "invalid_argument",
@@ -109,7 +111,7 @@ void registerBrdfRoutes(httplib::Server& server, Service& service) {
     // Checked before compiling to fail fast; putUser checks again atomically.
     if (auto existing = service.library.find(name); existing && existing->builtin)
       return sendError(res, 409, "conflict", "BRDF '" + name + "' is built in and read-only", "name");
-    auto text = readBrdfTextBody(req, res);
+    auto text = readBrdfTextBody(req, res, reader);
     if (!text) return;
     Result<Compiled> compiled = parseAndCompile(service, *text);
     if (!compiled) return sendError(res, compiled.error());

@@ -21,16 +21,42 @@ std::optional<nlohmann::json> readJsonBody(const httplib::Request& req, httplib:
   return std::move(parsed.value);
 }
 
-std::optional<std::string> readBrdfTextBody(const httplib::Request& req, httplib::Response& res) {
-  if (req.body.size() > kMaxBrdfSource) {
+std::optional<std::string> readBrdfTextBody(const httplib::Request& req, httplib::Response& res,
+                                            const httplib::ContentReader& reader) {
+  // Read here, not by httplib: Debian's libcpp-httplib refuses an
+  // application/x-www-form-urlencoded body over 8 KiB (curl --data-binary's default type)
+  // before a plain handler runs. Any content type is the text; a multipart form's one part is.
+  std::string text;
+  bool tooLarge = false, extraPart = false;
+  size_t parts = 0;
+  auto append = [&](const char* data, size_t n) {
+    if (text.size() + n > kMaxBrdfSource) {
+      tooLarge = true;
+      return false;
+    }
+    text.append(data, n);
+    return true;
+  };
+  const bool read = req.is_multipart_form_data()
+                        ? reader([&](const httplib::MultipartFormData&) { return !(extraPart = ++parts > 1); }, append)
+                        : reader(append);
+  if (tooLarge) {
     sendError(res, 413, "payload_too_large", ".brdf text is larger than " + std::to_string(kMaxBrdfSource) + " bytes");
     return std::nullopt;
   }
-  if (req.body.empty()) {
+  if (extraPart) {
+    sendError(res, 400, "invalid_argument", "send the .brdf text as the body, or as the only part of a form", "body");
+    return std::nullopt;
+  }
+  if (!read) {
+    sendError(res, 400, "invalid_argument", "the request body could not be read", "body");
+    return std::nullopt;
+  }
+  if (text.empty()) {
     sendError(res, 400, "invalid_argument", "the request body must be the .brdf text", "body");
     return std::nullopt;
   }
-  return req.body;
+  return text;
 }
 
 void setFrameHeaders(httplib::Response& res, const FrameStats& stats) {

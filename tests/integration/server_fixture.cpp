@@ -14,6 +14,13 @@ namespace brdfa::itest {
 
 // ------------------------------------------------------------------------------------------
 
+std::string readRepoFile(const std::string& relative) {
+  std::ifstream in(std::string(BRDFA_SOURCE_DIR) + "/" + relative, std::ios::binary);
+  std::ostringstream text;
+  text << in.rdbuf();
+  return text.str();
+}
+
 std::unique_ptr<ServerProcess> ServerTest::server_;
 std::string ServerTest::startError_;
 

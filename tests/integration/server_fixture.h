@@ -48,6 +48,9 @@ class ServerTest : public ::testing::Test {
 // Parses a response body as JSON (null when it is not JSON).
 nlohmann::json bodyJson(const httplib::Result& r);
 
+// A file of the source tree, by its path relative to the repository root ("" when unreadable).
+std::string readRepoFile(const std::string& relative);
+
 // Decoded PFM body.
 struct Image {
   int width = 0, height = 0;

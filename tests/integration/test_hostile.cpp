@@ -1,21 +1,12 @@
 // Issue 12: the hostile corpus (tests/hostile/) against a real server. Each attack must get its
 // documented answer, and the server must stay healthy and keep serving others meanwhile.
 #include <atomic>
-#include <fstream>
-#include <sstream>
 #include <thread>
 
 #include "server_fixture.h"
 
 namespace brdfa::itest {
 namespace {
-
-std::string hostileFile(const std::string& name) {
-  std::ifstream in(std::string(BRDFA_SOURCE_DIR) + "/tests/hostile/" + name, std::ios::binary);
-  std::ostringstream text;
-  text << in.rdbuf();
-  return text.str();
-}
 
 // A server with a short compile budget, so the attacks end quickly.
 class Hostile : public ServerTest {
@@ -28,9 +19,9 @@ class Hostile : public ServerTest {
 };
 
 TEST_F(Hostile, MacroBombIsRefusedAtTheCompileBudgetWhileOtherCompilesGoOn) {
-  const std::string bomb = hostileFile("macro_bomb.brdf");
+  const std::string bomb = readRepoFile("tests/hostile/macro_bomb.brdf");
   ASSERT_FALSE(bomb.empty());
-  const std::string lambert = hostileFile("../../shaders/brdfs/lambert.brdf");
+  const std::string lambert = readRepoFile("shaders/brdfs/lambert.brdf");
   ASSERT_FALSE(lambert.empty());
 
   std::atomic<int> order{0};

@@ -360,6 +360,33 @@ TEST_F(LibraryApi, BuiltinsAreReadOnlyAndNamesAreChecked) {
   EXPECT_EQ(r->status, 404);
 }
 
+// curl --data-binary sends application/x-www-form-urlencoded, and curl -F a multipart form:
+// a .brdf far over 8 KiB must be read as text either way (issue 12).
+TEST_F(LibraryApi, LargeBrdfIsReadAsTextWhateverItsContentType) {
+  std::string text = readRepoFile("shaders/brdfs/lambert.brdf");
+  ASSERT_FALSE(text.empty());
+  while (text.size() < 64 * 1024) text += "# padding: a long comment, as a well-documented file has " + std::to_string(text.size()) + "\n";
+  for (const char* type : {"application/x-www-form-urlencoded", "text/plain", "application/octet-stream"}) {
+    auto r = post("/api/brdfs/validate", text, type);
+    ASSERT_TRUE(r);
+    EXPECT_EQ(r->status, 200) << type << ": " << r->body.substr(0, 300);
+  }
+  httplib::MultipartFormDataItems form = {{"file", text, "lambert.brdf", "application/octet-stream"}};
+  auto r = server_->client()->Put("/api/brdfs/big_documented", form);
+  ASSERT_TRUE(r);
+  EXPECT_EQ(r->status, 201) << r->body.substr(0, 300);
+  auto stored = get("/api/brdfs/big_documented");
+  ASSERT_TRUE(stored);
+  EXPECT_EQ(bodyJson(stored).value("source", ""), text);
+  del("/api/brdfs/big_documented");
+  // Over the 1 MiB limit: 413 that says so, whatever the type.
+  std::string huge(1100 * 1024, '#');
+  r = post("/api/brdfs/validate", huge, "application/x-www-form-urlencoded");
+  ASSERT_TRUE(r);
+  EXPECT_EQ(r->status, 413);
+  EXPECT_NE(bodyJson(r).value("message", "").find(".brdf text is larger than"), std::string::npos) << r->body;
+}
+
 TEST_F(LibraryApi, PresetsRoundTrip) {
   // On a built-in: ggx's parameters.
   json ggx = bodyJson(get("/api/brdfs/ggx"));
