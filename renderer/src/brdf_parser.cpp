@@ -257,7 +257,7 @@ class Parser {
   void beginSection(std::string_view name, int line);
   void endSection(std::string_view name, int line);
   void handleOutsideLine(std::string_view text, int line);
-  void handleGlslLine(std::string_view raw);
+  void handleGlslLine(std::string_view raw, int line);
   void handleParamLine(std::string_view text, int line);
   bool parseFloatParam(const std::vector<std::string_view>& t, BrdfParam& p, int line);
   bool parseColorParam(const std::vector<std::string_view>& t, BrdfParam& p, int line);
@@ -346,9 +346,13 @@ void Parser::handleOutsideLine(std::string_view text, int line) {
   warn(line, "text outside any section is ignored: " + quoted(trim(text)));
 }
 
-void Parser::handleGlslLine(std::string_view raw) {
+void Parser::handleGlslLine(std::string_view raw, int line) {
   if (!glslTarget_) return;  // a duplicate section, already reported
   std::string_view t = trim(raw);
+  // Not a '#' comment: the file meant to pull in code it does not hold, and dropping the line
+  // would only move the error elsewhere (an undefined function) or hide it.
+  if (!t.empty() && t.front() == '#' && trim(t.substr(1)).substr(0, 7) == "include")
+    error(line, "#include is not supported: a .brdf file holds all its code; paste the included code in");
   if (!t.empty() && t.front() == '#' && !isPreprocessorDirective(t)) raw = {};
   glslTarget_->append(raw);
   glslTarget_->push_back('\n');
@@ -527,7 +531,7 @@ Result<BrdfDefinition> Parser::run(std::string_view text) {
       case Section::None: handleOutsideLine(stripComment(raw), line); break;
       case Section::Parameters: handleParamLine(raw, line); break;
       case Section::Shader:
-      case Section::Sample: handleGlslLine(raw); break;
+      case Section::Sample: handleGlslLine(raw, line); break;
       case Section::IsFunc:
       case Section::Unknown: break;  // ignored, warned at its `::begin`
     }

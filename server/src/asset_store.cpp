@@ -253,6 +253,29 @@ json assetToJson(const AssetRecord& r) {
   return j;
 }
 
+namespace {
+
+// The code point of the valid n-byte UTF-8 sequence at raw[i].
+uint32_t codePointAt(std::string_view raw, size_t i, size_t n) {
+  const auto byte = [&](size_t k) { return static_cast<unsigned char>(raw[i + k]); };
+  if (n == 1) return byte(0);
+  uint32_t cp = byte(0) & (0xFFu >> (n + 1));
+  for (size_t k = 1; k < n; ++k) cp = (cp << 6) | (byte(k) & 0x3Fu);
+  return cp;
+}
+
+// Characters a name shown to other users must not carry: C0 and C1 controls, and the
+// invisible format characters that reorder or hide text (bidi embeddings, overrides and
+// isolates such as U+202E, which can make "gpj.exe" read as "exe.jpg"; zero-width characters;
+// the byte order mark; soft hyphen; interlinear annotation; tags).
+bool isControlOrFormat(uint32_t cp) {
+  return cp < 0x20 || (cp >= 0x7F && cp <= 0x9F) || cp == 0xAD || cp == 0x061C || cp == 0x180E ||
+         (cp >= 0x200B && cp <= 0x200F) || (cp >= 0x202A && cp <= 0x202E) || (cp >= 0x2060 && cp <= 0x206F) ||
+         cp == 0xFEFF || (cp >= 0xFFF9 && cp <= 0xFFFB) || (cp >= 0xE0000 && cp <= 0xE007F);
+}
+
+}  // namespace
+
 std::string sanitizeUploadFileName(std::string_view raw) {
   // Only the last path component, whichever separator the client's system uses.
   if (size_t slash = raw.find_last_of("/\\"); slash != std::string_view::npos) raw.remove_prefix(slash + 1);
@@ -263,9 +286,7 @@ std::string sanitizeUploadFileName(std::string_view raw) {
       ++i;
       continue;
     }
-    const unsigned char c = static_cast<unsigned char>(raw[i]);
-    const bool control = n == 1 && (c < 0x20 || c == 0x7F);
-    if (!control) {
+    if (!isControlOrFormat(codePointAt(raw, i, n))) {
       if (out.size() + n > kMaxDisplayName) break;
       out.append(raw.substr(i, n));
     }

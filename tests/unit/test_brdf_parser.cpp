@@ -120,6 +120,18 @@ TEST(BrdfParser, NoAnalyticLineAndExplorerCommentsInShader) {
             "vec3 BRDF(vec3 L, vec3 V, vec3 N, vec3 X, vec3 Y) { return vec3(TWO); }\n");
 }
 
+TEST(BrdfParser, IncludeIsAnErrorOnItsLineNotADroppedComment) {
+  // Issue 12: '#include' used to be blanked as an Explorer '#' comment, without a word.
+  for (const char* include : {"#include \"common.glsl\"", "  # include <lib.glsl>"})
+    expectErrorAt(std::string("analytic\n::begin shader\n") + include +
+                      "\nvec3 BRDF(vec3 L, vec3 V, vec3 N, vec3 X, vec3 Y) { return vec3(1); }\n::end shader\n",
+                  3, "#include is not supported");
+  // Sample sections too.
+  expectErrorAt(std::string("::begin shader\nvec3 BRDF(vec3 L, vec3 V, vec3 N, vec3 X, vec3 Y) { return vec3(1); }\n"
+                            "::end shader\n::begin sample\n#include \"s.glsl\"\n::end sample\n"),
+                5, "#include is not supported");
+}
+
 TEST(BrdfParser, TrailingCommentDoesNotSupplyValues) {
   expectErrorAt(withParam("float roughness 0 # 1 0.5"), 3, "roughness");
 }
