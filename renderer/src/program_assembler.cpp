@@ -218,6 +218,32 @@ std::vector<uint8_t> ParamBlockLayout::pack(const BrdfDefinition& brdf,
   return bytes;
 }
 
+namespace {
+
+// Appends to `out` every NAME of a `# define NAME` line in `text` (conditional ones too:
+// #undef of a name never defined is harmless). Preprocessor lines are whole lines.
+void collectDefinedMacros(const std::string& text, std::vector<std::string>& out) {
+  size_t at = 0;
+  while (at < text.size()) {
+    size_t end = text.find('\n', at);
+    if (end == std::string::npos) end = text.size();
+    std::string_view line(text.data() + at, end - at);
+    at = end + 1;
+    size_t i = line.find_first_not_of(" \t");
+    if (i == std::string_view::npos || line[i] != '#') continue;
+    i = line.find_first_not_of(" \t", i + 1);
+    if (i == std::string_view::npos || line.substr(i, 6) != "define") continue;
+    i = line.find_first_not_of(" \t", i + 6);
+    if (i == std::string_view::npos || !isIdentStart(line[i])) continue;
+    size_t j = i;
+    while (j < line.size() && isIdentChar(line[j])) ++j;
+    std::string name(line.substr(i, j - i));
+    if (std::find(out.begin(), out.end(), name) == out.end()) out.push_back(std::move(name));
+  }
+}
+
+}  // namespace
+
 AssembledProgram assembleProgram(const ProgramSpec& spec) {
   static const std::vector<BrdfParam> kNoParams;
   const std::vector<BrdfParam>& params = spec.brdf ? spec.brdf->params : kNoParams;
@@ -231,7 +257,7 @@ AssembledProgram assembleProgram(const ProgramSpec& spec) {
   for (const std::string& d : spec.defines) s += "#define " + d + "\n";
 
   s += program.params.glsl();
-  for (const std::string& chunk : spec.commonChunks) appendLine(s, chunk);
+  for (const std::string& chunk : spec.userChunks) appendLine(s, chunk);
 
   if (spec.brdf) {
     // User functions named like GLSL built-ins (see builtinFunctionNames) are renamed for the
@@ -246,8 +272,14 @@ AssembledProgram assembleProgram(const ProgramSpec& spec) {
     if (spec.brdf->hasSampler())
       appendUserText(s, spec.brdf->sampleShader, spec.brdf->sampleFirstLine);
     for (const std::string& name : renamed) s += "#undef " + name + "\n";
+    // The BRDF's own macros end with its text: none may rewrite the integrator's code.
+    std::vector<std::string> macros;
+    collectDefinedMacros(spec.brdf->shader, macros);
+    if (spec.brdf->hasSampler()) collectDefinedMacros(spec.brdf->sampleShader, macros);
+    for (const std::string& name : macros) s += "#undef " + name + "\n";
     appendGeneratedLineDirective(s);
   }
+  for (const std::string& chunk : spec.commonChunks) appendLine(s, chunk);
   appendLine(s, spec.integrator);
 
   program.hash = fnv1a64(s);

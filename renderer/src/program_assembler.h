@@ -35,7 +35,11 @@ ParamBlockLayout layoutParams(const std::vector<BrdfParam>& params);
 struct ProgramSpec {
   const BrdfDefinition* brdf = nullptr;
   std::vector<std::string> defines;       // "NAME" or "NAME VALUE", emitted as #define in the prelude
-  std::vector<std::string> commonChunks;  // GLSL text of shaders/lib pieces, in order
+  // GLSL text of shaders/lib pieces, in order. userChunks come before the BRDF's text (what it
+  // may read: its inputs); commonChunks after it, so the BRDF's text cannot name the
+  // integrator's resources (issue 12), and the macros it defines are #undef'd before them.
+  std::vector<std::string> userChunks;
+  std::vector<std::string> commonChunks;
   std::string integrator;                 // kernel text containing main()
 };
 

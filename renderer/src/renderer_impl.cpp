@@ -2,11 +2,13 @@
 
 #include <algorithm>
 #include <array>
+#include <cctype>
 #include <cmath>
 #include <cstdlib>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <set>
 #include <sstream>
 #include <thread>
 
@@ -16,6 +18,7 @@
 #include "meshes.h"
 #include "obj_loader.h"
 #include "render_view.h"
+#include "spirv_resources.h"
 #include "vk_check.h"
 
 namespace brdfa {
@@ -168,6 +171,10 @@ Result<void> RendererImpl::createLayouts() {
     object[2 + t] = {2 + t, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, 1, VK_SHADER_STAGE_COMPUTE_BIT, nullptr};
   li.bindingCount = static_cast<uint32_t>(object.size());
   li.pBindings = object.data();
+  // The slots a compute program may declare: what a BRDF's text adds beyond them is refused.
+  for (const auto& [binding, type] : viewBindings) computeSlots_.insert({0, binding});
+  for (const VkDescriptorSetLayoutBinding& b : object)
+    if (b.stageFlags & VK_SHADER_STAGE_COMPUTE_BIT) computeSlots_.insert({1, b.binding});
   BRDFA_VK_TRY(vkCreateDescriptorSetLayout(d, &li, nullptr, &objectSetLayout_));
 
   VkDescriptorSetLayout sets[2] = {viewSetLayout_, objectSetLayout_};
@@ -438,12 +445,52 @@ AssembledProgram RendererImpl::assembleShadeProgram(const BrdfDefinition& brdf, 
   const BrdfFeatures features = detectFeatures(used);
   if (features.tangentFrame) spec.defines.push_back("BRDFA_TANGENT_FRAME");
   if (features.textures) spec.defines.push_back("BRDFA_TEXTURES");
+  spec.userChunks.push_back(sources_.get("lib/brdf_inputs.glsl"));
+  if (brdf.format == BrdfFormat::Legacy) spec.userChunks.push_back(sources_.get("lib/legacy_inputs.glsl"));
   for (const char* piece : {"lib/bindings.glsl", "lib/random.glsl", "lib/frame.glsl", "lib/sampling.glsl",
-                            "lib/environment.glsl", "lib/environment_sampling.glsl", "lib/brdf_inputs.glsl"})
+                            "lib/environment.glsl", "lib/environment_sampling.glsl"})
     spec.commonChunks.push_back(sources_.get(piece));
-  if (brdf.format == BrdfFormat::Legacy) spec.commonChunks.push_back(sources_.get("lib/legacy_inputs.glsl"));
   spec.integrator = sources_.get("kernels/shade.comp.glsl");
   return assembleProgram(spec);
+}
+
+// The line of `brdf`'s text where `name` first appears as a whole word (0: nowhere).
+static int lineOfName(const BrdfDefinition& brdf, const std::string& name) {
+  if (name.empty()) return 0;
+  auto search = [&](const std::string& text, int firstLine) {
+    int line = firstLine;
+    for (size_t at = 0; at < text.size();) {
+      size_t end = text.find('\n', at);
+      if (end == std::string::npos) end = text.size();
+      for (size_t i = text.find(name, at); i != std::string::npos && i + name.size() <= end; i = text.find(name, i + 1)) {
+        auto ident = [](char c) { return std::isalnum(static_cast<unsigned char>(c)) || c == '_'; };
+        if ((i == at || !ident(text[i - 1])) && (i + name.size() == text.size() || !ident(text[i + name.size()])))
+          return line;
+      }
+      at = end + 1;
+      ++line;
+    }
+    return 0;
+  };
+  if (int line = search(brdf.shader, brdf.shaderFirstLine)) return line;
+  return brdf.hasSampler() ? search(brdf.sampleShader, brdf.sampleFirstLine) : 0;
+}
+
+Result<void> RendererImpl::checkResources(const SpirvBinary& code, const BrdfDefinition* brdf) const {
+  // The legacy environment name shares the environment's slot (lib/legacy_inputs.glsl).
+  static const std::set<std::string> aliases = {"skybox"};
+  const std::vector<ForeignResource> foreign = foreignResources(code.words, computeSlots_, aliases);
+  if (foreign.empty()) return {};
+  Error e = makeError(ErrorCode::CompileError,
+                      "a BRDF file may read its parameters, iTexture0..3 and texCoord, and declare no resources of its "
+                      "own: it declares " +
+                          foreign.front().what + (foreign.front().name.empty() ? "" : " ('" + foreign.front().name + "')"));
+  for (const ForeignResource& f : foreign)
+    e.diagnostics.push_back(Diagnostic{brdf ? lineOfName(*brdf, f.name) : 0, 0, "error",
+                                       "declares " + f.what + (f.name.empty() ? "" : " ('" + f.name + "')") +
+                                           ": a BRDF file may not add resources, shared memory, barriers or "
+                                           "interface variables"});
+  return e;
 }
 
 Result<CompileInfo> RendererImpl::compileBrdf(const BrdfDefinition& brdf) {
@@ -452,6 +499,7 @@ Result<CompileInfo> RendererImpl::compileBrdf(const BrdfDefinition& brdf) {
   CompileInfo info;
   auto code = spirv(ShaderStage::Compute, program.source, &info.cached);
   if (!code) return code.takeError();
+  BRDFA_TRY(checkResources(**code, &brdf));
   info.warnings = brdf.warnings;
   if (brdf.hasSampler() && !detectFeatures(brdf).samplerPdf) {
     Diagnostic d;
@@ -498,6 +546,7 @@ Result<std::shared_ptr<const ShadeKernel>> RendererImpl::compiledKernel(const As
   if (it != kernelCache_.end()) return it->second;
   auto code = spirv(ShaderStage::Compute, program.source, nullptr, compileOnMiss);
   if (!code) return code.takeError();
+  BRDFA_TRY(checkResources(**code, nullptr));
   auto kernel = createComputeKernel((*code)->words);
   if (!kernel) return kernel.takeError();
   ++pipelinesCreated_;
@@ -519,8 +568,8 @@ AssembledProgram RendererImpl::assembleCheckProgram(const BrdfDefinition& brdf, 
   const BrdfFeatures features = detectFeatures(brdf);
   if (features.textures) spec.defines.push_back("BRDFA_TEXTURES");
   if (features.samplerPdf) spec.defines.push_back("BRDFA_HAS_PDF");  // check_sampler: chi-square test
-  for (const char* piece : {"lib/bindings.glsl", "lib/random.glsl", "lib/sampling.glsl", "lib/environment_sampling.glsl",
-                            "lib/brdf_inputs.glsl"})
+  spec.userChunks.push_back(sources_.get("lib/brdf_inputs.glsl"));
+  for (const char* piece : {"lib/bindings.glsl", "lib/random.glsl", "lib/sampling.glsl", "lib/environment_sampling.glsl"})
     spec.commonChunks.push_back(sources_.get(piece));
   spec.integrator = sources_.get(std::string("kernels/") + kernel);
   return assembleProgram(spec);

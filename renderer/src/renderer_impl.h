@@ -13,6 +13,7 @@
 #include "brdfa/renderer.h"
 #include "environment_maps.h"
 #include "compile_pool.h"
+#include "spirv_resources.h"
 #include "glsl_compiler.h"
 #include "image_decode.h"
 #include "meshes.h"
@@ -132,6 +133,10 @@ class RendererImpl final : public Renderer, public std::enable_shared_from_this<
   std::atomic<uint64_t> glslCompiles_{0}, spirvCacheHits_{0}, spirvDiskHits_{0}, pipelinesCreated_{0};
   std::unique_ptr<SpirvDiskCache> diskCache_;
   std::unique_ptr<CompilePool> compilePool_;  // every GLSL compile runs there
+  std::set<DescriptorSlot> computeSlots_;      // the layout's slots a compute program may use
+  // CompileError when a compiled program declares what its pipeline layout does not provide
+  // (spirv_resources.h); lines point into `brdf`'s text when given.
+  Result<void> checkResources(const SpirvBinary& code, const BrdfDefinition* brdf) const;
 
   // Asset caches. Built-ins are kept for the renderer's life; registered (uploaded) assets
   // only while a view holds them, so large uploads do not pile up in memory.

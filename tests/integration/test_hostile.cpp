@@ -60,5 +60,31 @@ TEST_F(Hostile, MacroBombIsRefusedAtTheCompileBudgetWhileOtherCompilesGoOn) {
   EXPECT_EQ(again->status, 200) << again->body;
 }
 
+TEST_F(Hostile, UserCodeCannotReachTheIntegratorsResources) {
+  struct Case {
+    const char* file;
+    int line;              // of the first diagnostic; 0: not checked
+    const char* fragment;  // in the message or a diagnostic
+  };
+  for (const Case& c : {Case{"names_accumulators.brdf", 7, "brdfa_accum"},
+                        Case{"own_buffer_on_accumulators.brdf", 6, "set 0, binding 3, which the integrator already uses"},
+                        Case{"shared_memory_and_barrier.brdf", 0, "shared memory"},
+                        Case{"shared_memory_and_barrier.brdf", 0, "a barrier"},
+                        Case{"unused_slot.brdf", 5, "set 0, binding 1, which the pipeline layout does not have"}}) {
+    const std::string text = readRepoFile(std::string("tests/hostile/") + c.file);
+    ASSERT_FALSE(text.empty()) << c.file;
+    for (const char* route : {"/api/brdfs/validate", "/api/brdfs/hostile_resource"}) {
+      auto r = route[11] == 'v' ? post(route, text, "text/plain") : put(route, text, "text/plain");
+      ASSERT_TRUE(r);
+      EXPECT_EQ(r->status, 422) << c.file << " " << route << ": " << r->body;
+      const nlohmann::json e = bodyJson(r);
+      ASSERT_TRUE(e.contains("diagnostics") && !e["diagnostics"].empty()) << r->body;
+      if (c.line) EXPECT_EQ(e["diagnostics"][0].value("line", -1), c.line) << c.file << ": " << r->body;
+      EXPECT_NE(r->body.find(c.fragment), std::string::npos) << c.file << ": " << r->body;
+    }
+  }
+  EXPECT_EQ(get("/api/brdfs/hostile_resource")->status, 404) << "a refused BRDF must not be stored";
+}
+
 }  // namespace
 }  // namespace brdfa::itest

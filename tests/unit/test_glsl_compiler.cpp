@@ -53,6 +53,7 @@ std::string brdfFile(const std::string& line9 = "float unused = 1.0;",
          "::end sample\n";                                                              // 22
 }
 
+// `chunks` go before the BRDF's text (as its inputs do).
 Result<SpirvBinary> compileBrdf(const std::string& text, const std::string& integrator = kIntegrator,
                                 std::vector<std::string> chunks = {}) {
   Result<BrdfDefinition> def = parseBrdf(text);
@@ -60,7 +61,7 @@ Result<SpirvBinary> compileBrdf(const std::string& text, const std::string& inte
   ProgramSpec spec;
   spec.brdf = &def.value();
   spec.integrator = integrator;
-  spec.commonChunks = std::move(chunks);
+  spec.userChunks = std::move(chunks);
   return compileGlsl(ShaderStage::Compute, assembleProgram(spec).source);
 }
 

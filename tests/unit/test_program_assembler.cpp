@@ -147,6 +147,7 @@ class Assembly : public ::testing::Test {
     brdf.shaderFirstLine = 7;
     spec.brdf = &brdf;
     spec.defines = {"BRDFA_ONE", "BRDFA_TWO 2"};
+    spec.userChunks = {"// user chunk\nvec2 texCoord;"};
     spec.commonChunks = {"// chunk A\nfloat chunkA() { return 1.0; }", "// chunk B\n"};
     spec.integrator = "// integrator\nvoid main() {}\n";
   }
@@ -164,31 +165,50 @@ TEST_F(Assembly, FixedOrderAndLineDirectives) {
   EXPECT_EQ(lines[3], "layout(std140, set = 1, binding = 0) uniform BrdfParams {");
   EXPECT_EQ(p.source.find("GL_GOOGLE_include_directive"), std::string::npos);
 
+  // The BRDF's inputs, the BRDF's text, then the integrator's common code (which the BRDF's
+  // text therefore cannot name), then the integrator.
   const size_t block = p.source.find("uniform BrdfParams");
+  const size_t userChunk = p.source.find("// user chunk");
   const size_t chunkA = p.source.find("// chunk A");
   const size_t chunkB = p.source.find("// chunk B");
   const size_t userLine = p.source.find("#line 7 1\nfloat f()");
   const size_t integrator = p.source.find("// integrator");
   ASSERT_NE(userLine, std::string::npos) << p.source;
-  EXPECT_LT(block, chunkA);
+  EXPECT_LT(block, userChunk);
+  EXPECT_LT(userChunk, userLine);
+  EXPECT_LT(userLine, chunkA);
   EXPECT_LT(chunkA, chunkB);
-  EXPECT_LT(chunkB, userLine);
-  EXPECT_LT(userLine, integrator);
+  EXPECT_LT(chunkB, integrator);
   // The chunk without a trailing newline must not run into the next one.
   EXPECT_NE(p.source.find("return 1.0; }\n// chunk B"), std::string::npos);
 
-  // `#line k 0` before the integrator names the true line of the line after it.
+  // `#line k 0` after the user's text names the true line of the line after it.
   for (size_t i = 0; i < lines.size(); ++i) {
     if (lines[i].rfind("#line ", 0) == 0 && lines[i].size() > 2 &&
         lines[i].substr(lines[i].size() - 2) == " 0") {
       const int k = std::stoi(lines[i].substr(6));
       EXPECT_EQ(k, static_cast<int>(i) + 2) << "directive on line " << i + 1;
       ASSERT_LT(i + 1, lines.size());
-      EXPECT_EQ(lines[i + 1], "// integrator");
+      EXPECT_EQ(lines[i + 1], "// chunk A");
     }
   }
   EXPECT_EQ(p.hash, fnv1a64(p.source));
   EXPECT_EQ(p.params.size, 16u);
+}
+
+TEST_F(Assembly, MacrosOfTheBrdfEndWithItsText) {
+  // Issue 12: a BRDF's macros must not rewrite the integrator's code after it.
+  brdf.shader = "#define brdfa_accum evil\n  #  define  TWO 2.0\n#if 0\n#define HIDDEN 1\n#endif\n"
+                "vec3 BRDF(vec3 L, vec3 V, vec3 N, vec3 X, vec3 Y) { return vec3(TWO); }\n";
+  AssembledProgram p = assembleProgram(spec);
+  const size_t lastUser = p.source.find("vec3 BRDF(");
+  const size_t chunkA = p.source.find("// chunk A");
+  for (const char* name : {"brdfa_accum", "TWO", "HIDDEN"}) {
+    const size_t undef = p.source.find(std::string("#undef ") + name + "\n");
+    ASSERT_NE(undef, std::string::npos) << name << "\n" << p.source;
+    EXPECT_LT(lastUser, undef) << name;
+    EXPECT_LT(undef, chunkA) << name;
+  }
 }
 
 TEST_F(Assembly, SampleSectionGetsItsOwnLine) {
@@ -243,8 +263,10 @@ TEST_F(Assembly, UserFunctionsNamedLikeBuiltinsAreRenamedForUserTextOnly) {
   ASSERT_NE(sample, std::string::npos) << src;
   ASSERT_NE(undefReflect, std::string::npos) << src;
   ASSERT_NE(undefStep, std::string::npos) << src;
-  // After the common code, before the first user line; undone after the last user section.
-  EXPECT_LT(src.find("// chunk B"), defReflect);
+  // After the BRDF's inputs, before the first user line; undone after the last user section,
+  // before the integrator's common code.
+  EXPECT_LT(src.find("// user chunk"), defReflect);
+  EXPECT_LT(undefReflect, src.find("// chunk A"));
   EXPECT_LT(defReflect, user);
   EXPECT_LT(defStep, user);
   EXPECT_LT(sample, undefReflect);
