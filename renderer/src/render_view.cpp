@@ -52,6 +52,7 @@ bool sameLighting(const Scene& a, const Scene& b) {
 RenderViewImpl::RenderViewImpl(std::shared_ptr<RendererImpl> renderer) : r_(std::move(renderer)) {}
 
 RenderViewImpl::~RenderViewImpl() {
+  (void)r_->exchangeViewMemory(reservedBytes_, 0, "");  // giving back never fails
   VkDevice d = r_->ctx().device();
   releaseObjects(objects_);
   if (framebuffer_) vkDestroyFramebuffer(d, framebuffer_, nullptr);
@@ -99,6 +100,22 @@ size_t RenderViewImpl::partialCount(uint32_t width, uint32_t height) const {
 Result<void> RenderViewImpl::resize(uint32_t width, uint32_t height) {
   VkContext& ctx = r_->ctx();
   VkDevice d = ctx.device();
+  // Everything below, counted against the renderer's budget before any of it is allocated.
+  const VkDeviceSize pixels = VkDeviceSize(width) * height;
+  const uint32_t jitter = pixels <= VkDeviceSize(1024) * 1024 ? kMaxJitter : 1;
+  const VkDeviceSize align = std::max<VkDeviceSize>(ctx.limits().minStorageBufferOffsetAlignment, 16);
+  const VkDeviceSize stride = (pixels * 3 * 16 + align - 1) / align * align;
+  const uint64_t bytes = pixels * (3 * 16 + 4)                // G-buffer attachments and depth
+                         + stride * jitter + pixels * 32      // G-buffer copies, accumulators
+                         + pixels * (4 + 16) + partialCount(width, height) * 16;  // outputs
+  // The old size's share is given back in the same step: a refused size leaves the view as it
+  // was, still rendering its old size.
+  BRDFA_TRY(r_->exchangeViewMemory(reservedBytes_, bytes,
+                                   "a " + std::to_string(width) + "x" + std::to_string(height) + " view"));
+  reservedBytes_ = bytes;
+  jitterCount_ = jitter;
+  sliceStride_ = stride;
+
   if (framebuffer_) vkDestroyFramebuffer(d, framebuffer_, nullptr);
   framebuffer_ = VK_NULL_HANDLE;
   width_ = height_ = 0;
@@ -131,13 +148,10 @@ Result<void> RenderViewImpl::resize(uint32_t width, uint32_t height) {
   fci.layers = 1;
   BRDFA_VK_TRY(vkCreateFramebuffer(d, &fci, nullptr, &framebuffer_));
 
-  const VkDeviceSize pixels = VkDeviceSize(width) * height;
   const VkBufferUsageFlags storage = VK_BUFFER_USAGE_STORAGE_BUFFER_BIT;
-  // Four jittered slices cost 4 x 48 bytes per pixel (50 MB at 512^2); above 1024^2 pixels the
-  // memory is not worth it and the image is not anti-aliased (its pixels are small anyway).
-  jitterCount_ = pixels <= VkDeviceSize(1024) * 1024 ? kMaxJitter : 1;
-  const VkDeviceSize align = std::max<VkDeviceSize>(ctx.limits().minStorageBufferOffsetAlignment, 16);
-  sliceStride_ = (pixels * 3 * 16 + align - 1) / align * align;
+  // Four jittered slices (jitterCount_ above) cost 4 x 48 bytes per pixel (50 MB at 512^2);
+  // above 1024^2 pixels the memory is not worth it and the image is not anti-aliased (its
+  // pixels are small anyway).
   slicesReady_ = 0;
   struct Want { Buffer* buffer; VkDeviceSize size; VkBufferUsageFlags usage; bool host; };
   // With the host resolve, the host reads the G-buffer and accumulators in place.
@@ -300,6 +314,10 @@ Result<void> RenderViewImpl::setScene(const Scene& scene) {
     auto r = resize(width, height);
     if (!r) {
       releaseObjects(objects);
+      if (r.error().code == ErrorCode::OverBudget) {
+        env_ = previousEnv;  // refused before anything changed: the old scene goes on
+        return r.takeError();
+      }
       hasScene_ = false;  // size-dependent resources are gone; the next setScene rebuilds them
       return r.takeError();
     }

@@ -76,6 +76,7 @@ class RenderViewImpl final : public RenderView {
   Image gPosition_, gNormal_, gTangent_, depth_;
   Buffer gbuffer_, accum_, counters_, outRgba8_, outFloat_, partials_;
   uint32_t width_ = 0, height_ = 0;
+  uint64_t reservedBytes_ = 0;  // of the renderer's view-memory budget, for the current size
 
   bool hasScene_ = false;
   Scene scene_;

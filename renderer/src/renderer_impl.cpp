@@ -51,6 +51,7 @@ Result<std::shared_ptr<RendererImpl>> RendererImpl::create(const RendererOptions
 
 Result<void> RendererImpl::init(const RendererOptions& options) {
   diskCache_ = std::make_unique<SpirvDiskCache>(options.cacheDir, options.loadCache);
+  viewMemoryBudget_ = options.maxViewMemoryBytes;
   const size_t workers = options.compileWorkers > 0
                              ? options.compileWorkers
                              : std::max<size_t>(2, std::thread::hardware_concurrency());
@@ -786,7 +787,30 @@ Result<std::shared_ptr<const GpuTexture>> RendererImpl::texture(const std::strin
 }
 
 RendererCounters RendererImpl::counters() const {
-  return RendererCounters{glslCompiles_.load(), spirvCacheHits_.load(), spirvDiskHits_.load(), pipelinesCreated_.load()};
+  return RendererCounters{glslCompiles_.load(), spirvCacheHits_.load(), spirvDiskHits_.load(),
+                          pipelinesCreated_.load(), viewMemory_.load(), viewMemoryBudget_};
+}
+
+namespace {
+std::string mebibytes(uint64_t bytes) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%.0f MiB", double(bytes) / (1024.0 * 1024.0));
+  return text;
+}
+}  // namespace
+
+Result<void> RendererImpl::exchangeViewMemory(uint64_t oldBytes, uint64_t newBytes, const std::string& what) {
+  uint64_t used = viewMemory_.load();
+  do {
+    const uint64_t others = used - std::min(used, oldBytes);
+    if (viewMemoryBudget_ && newBytes > oldBytes && others + newBytes > viewMemoryBudget_)
+      return makeError(ErrorCode::OverBudget, what + " needs " + mebibytes(newBytes) + " of render targets, and the " +
+                                                  "server's memory budget for them (--max-memory " +
+                                                  mebibytes(viewMemoryBudget_) + ") has " +
+                                                  mebibytes(viewMemoryBudget_ - std::min(others, viewMemoryBudget_)) +
+                                                  " left: use a smaller render size, or close other sessions");
+  } while (!viewMemory_.compare_exchange_weak(used, used - std::min(used, oldBytes) + newBytes));
+  return {};
 }
 
 namespace {

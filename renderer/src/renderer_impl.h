@@ -47,6 +47,11 @@ class RendererImpl final : public Renderer, public std::enable_shared_from_this<
   Result<EnvironmentSamplerReport> checkEnvironmentSampler(const std::string& environment) override;
   Result<int> preloadFromCache(const BrdfDefinition& brdf) override;
   RendererCounters counters() const override;
+  // Render-target memory of views against RendererOptions::maxViewMemoryBytes: replaces a
+  // view's reservation of `oldBytes` by `newBytes` in one step, or, when that would pass the
+  // budget, changes nothing and fails with OverBudget (its message names `what` and the
+  // budget). Giving back (newBytes <= oldBytes) never fails.
+  Result<void> exchangeViewMemory(uint64_t oldBytes, uint64_t newBytes, const std::string& what);
   Result<void> registerAsset(const std::string& name, AssetKind kind, const std::string& path) override;
   std::vector<std::string> environmentNames() const override;
   std::vector<std::string> meshNames() const override;
@@ -131,6 +136,8 @@ class RendererImpl final : public Renderer, public std::enable_shared_from_this<
   std::deque<uint64_t> kernelOrder_;
 
   std::atomic<uint64_t> glslCompiles_{0}, spirvCacheHits_{0}, spirvDiskHits_{0}, pipelinesCreated_{0};
+  std::atomic<uint64_t> viewMemory_{0};
+  uint64_t viewMemoryBudget_ = 0;
   std::unique_ptr<SpirvDiskCache> diskCache_;
   std::unique_ptr<CompilePool> compilePool_;  // every GLSL compile runs there
   std::set<DescriptorSlot> computeSlots_;      // the layout's slots a compute program may use

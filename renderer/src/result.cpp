@@ -10,6 +10,7 @@ const char* errorCodeName(ErrorCode code) {
     case ErrorCode::CompileError: return "compile_error";
     case ErrorCode::Unsupported: return "unsupported";
     case ErrorCode::DeviceError: return "device_error";
+    case ErrorCode::OverBudget: return "over_budget";
     case ErrorCode::Internal: return "internal";
   }
   return "internal";

@@ -58,6 +58,9 @@ std::string usageText(const char* program) {
          "  --compile-timeout S       seconds one GLSL compile may take (default 5)\n"
          "  --compile-memory MIB      memory one GLSL compile may use, in MiB (default 1024); a\n"
          "                            program past either budget is refused with 422\n"
+         "  --max-memory MIB          memory the render targets of all sessions and renders may take\n"
+         "                            together, in MiB (default: half the machine's RAM); a scene\n"
+         "                            that would pass it is refused with 507\n"
          "  --environment-dir DIR     register every *.exr in DIR that the renderer can read as the\n"
          "                            read-only environment blender_<name>; repeatable (default:\n"
          "                            Debian blender-data's\n"
@@ -153,6 +156,8 @@ ParseOutcome parse_command_line(int argc, const char* const* argv) {
       err = takeInt(1, 600, config.compileTimeoutSec);
     else if (name == "--compile-memory")
       err = takeInt(64, 1 << 20, config.compileMemoryMiB);
+    else if (name == "--max-memory")
+      err = takeInt(16, 1ll << 30, config.maxMemoryMiB);
     else if (name == "--environment-dir") {
       std::string dir;
       err = takeString(dir);

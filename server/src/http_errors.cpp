@@ -18,6 +18,8 @@ int httpStatusFor(ErrorCode code) {
     // The device is a shared resource that may come back (or the server gets restarted).
     case ErrorCode::DeviceError:
       return 503;
+    case ErrorCode::OverBudget:
+      return 507;
     case ErrorCode::Internal:
       return 500;
   }
@@ -36,6 +38,8 @@ const char* errorName(ErrorCode code) {
       return "unsupported";
     case ErrorCode::DeviceError:
       return "device_error";
+    case ErrorCode::OverBudget:
+      return "memory_budget";
     case ErrorCode::Internal:
       return "internal";
   }

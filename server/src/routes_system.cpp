@@ -122,6 +122,7 @@ void registerSystemRoutes(httplib::Server& server, Service& service) {
                 {"spirv_cache_hits", c.spirvCacheHits},
                 {"spirv_disk_hits", c.spirvDiskHits},
                 {"pipelines_created", c.pipelinesCreated}}},
+              {"memory", {{"render_targets_bytes", c.viewMemoryBytes}, {"budget_bytes", c.viewMemoryBudget}}},
               {"hot_load",
                {{"enabled", hot.enabled},
                 {"done", hot.done},

@@ -4,6 +4,8 @@
 #include <cstdio>
 #include <filesystem>
 
+#include <unistd.h>
+
 #include "brdfa_server/request_body.h"
 
 namespace brdfa::server {
@@ -74,6 +76,9 @@ Result<std::unique_ptr<Service>> Service::create(const ServerConfig& config, std
   options.loadCache = config.loadCache;
   options.compileSeconds = config.compileTimeoutSec;
   options.compileMemoryMiB = static_cast<size_t>(config.compileMemoryMiB);
+  // Half the machine's RAM unless told: the rest is for the driver, uploads, caches and the OS.
+  const uint64_t ram = uint64_t(sysconf(_SC_PHYS_PAGES)) * uint64_t(sysconf(_SC_PAGESIZE));
+  options.maxViewMemoryBytes = config.maxMemoryMiB ? config.maxMemoryMiB << 20 : ram / 2;
   Result<std::shared_ptr<Renderer>> renderer = Renderer::create(options);
   if (!renderer) return renderer.takeError();
   service->renderer = std::move(renderer.value());

@@ -79,11 +79,70 @@ TEST_F(Hostile, UserCodeCannotReachTheIntegratorsResources) {
       EXPECT_EQ(r->status, 422) << c.file << " " << route << ": " << r->body;
       const nlohmann::json e = bodyJson(r);
       ASSERT_TRUE(e.contains("diagnostics") && !e["diagnostics"].empty()) << r->body;
-      if (c.line) EXPECT_EQ(e["diagnostics"][0].value("line", -1), c.line) << c.file << ": " << r->body;
+      if (c.line) {
+        EXPECT_EQ(e["diagnostics"][0].value("line", -1), c.line) << c.file << ": " << r->body;
+      }
       EXPECT_NE(r->body.find(c.fragment), std::string::npos) << c.file << ": " << r->body;
     }
   }
   EXPECT_EQ(get("/api/brdfs/hostile_resource")->status, 404) << "a refused BRDF must not be stored";
+}
+
+// A server whose render targets may take 64 MiB in all.
+class MemoryBudget : public ServerTest {
+ protected:
+  static void SetUpTestSuite() {
+    server_ = std::make_unique<ServerProcess>();
+    startError_ = server_->start({"--idle-timeout", "3", "--max-memory", "64"});
+    if (!startError_.empty()) ADD_FAILURE() << "server did not start: " << startError_;
+  }
+};
+
+TEST_F(MemoryBudget, AViewPastTheBudgetIsRefusedWith507AndOthersGoOn) {
+  auto created = post("/api/sessions", R"({"render": {"width": 128, "height": 128}})");
+  ASSERT_TRUE(created);
+  ASSERT_EQ(created->status, 201) << created->body;
+  const std::string id = bodyJson(created).value("id", "");
+  auto frame = get("/api/sessions/" + id + "/frame?min_spp=1&format=pfm");
+  ASSERT_TRUE(frame);
+  ASSERT_EQ(frame->status, 200) << frame->body.substr(0, 300);
+  auto health = get("/api/health");
+  const nlohmann::json memory = bodyJson(health)["memory"];
+  EXPECT_EQ(memory.value("budget_bytes", 0ull), 64ull << 20) << memory.dump();
+  const uint64_t before = memory.value("render_targets_bytes", 0ull);
+  EXPECT_GT(before, 0u);
+  EXPECT_LE(before, 64ull << 20);
+
+  // 2048 x 2048 needs ~600 MiB of render targets: refused, and says why.
+  auto big = put("/api/sessions/" + id + "/scene", R"({"render": {"width": 2048, "height": 2048}})");
+  ASSERT_TRUE(big);
+  EXPECT_EQ(big->status, 507) << big->body.substr(0, 300);
+  const nlohmann::json error = bodyJson(big);
+  EXPECT_EQ(error.value("error", ""), "memory_budget") << big->body;
+  EXPECT_NE(error.value("message", "").find("--max-memory 64 MiB"), std::string::npos) << big->body;
+  // So is a one-shot render of that size, and a new session of it.
+  auto oneShot = post("/api/render", R"({"scene": {"render": {"width": 2048, "height": 2048}}, "spp": 1})");
+  ASSERT_TRUE(oneShot);
+  EXPECT_EQ(oneShot->status, 507) << oneShot->body.substr(0, 300);
+
+  // Nothing leaked: the refused views hold no memory, and the first session still renders its
+  // old scene.
+  EXPECT_EQ(bodyJson(get("/api/health"))["memory"].value("render_targets_bytes", 0ull), before);
+  frame = get("/api/sessions/" + id + "/frame?min_spp=2&format=pfm");
+  ASSERT_TRUE(frame);
+  EXPECT_EQ(frame->status, 200);
+  Image image;
+  ASSERT_TRUE(decodeImage(frame->body, image));
+  EXPECT_EQ(image.width, 128);
+  auto again = put("/api/sessions/" + id + "/scene", R"({"render": {"width": 128, "height": 128}})");
+  ASSERT_TRUE(again);
+  EXPECT_EQ(again->status, 200) << again->body.substr(0, 300);
+  frame = get("/api/sessions/" + id + "/frame?min_spp=4&format=pfm");
+  ASSERT_TRUE(frame);
+  EXPECT_EQ(frame->status, 200);
+  // Deleting the session gives its memory back.
+  EXPECT_EQ(del("/api/sessions/" + id)->status, 204);
+  EXPECT_LT(bodyJson(get("/api/health"))["memory"].value("render_targets_bytes", 0ull), before);
 }
 
 }  // namespace

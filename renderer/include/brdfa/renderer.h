@@ -35,6 +35,9 @@ struct RendererOptions {
   double compileSeconds = 5.0;
   size_t compileMemoryMiB = 1024;
   size_t compileWorkers = 0;  // at once; 0: one per core, at least 2
+  // Memory all render views' targets (G-buffer, accumulators, outputs) may take together; a
+  // view that would pass it fails with OverBudget. 0: no budget.
+  uint64_t maxViewMemoryBytes = 0;
 };
 
 struct DeviceInfo {
@@ -118,6 +121,8 @@ struct RendererCounters {
   uint64_t spirvCacheHits = 0;    // from memory
   uint64_t spirvDiskHits = 0;     // from the disk cache
   uint64_t pipelinesCreated = 0; // shading pipelines built (each costs a driver JIT)
+  uint64_t viewMemoryBytes = 0;   // render targets of all views now
+  uint64_t viewMemoryBudget = 0;  // RendererOptions::maxViewMemoryBytes (0: none)
 };
 
 // Numeric checks of one BRDF on the device (issue 3 item 6), through a compute kernel that

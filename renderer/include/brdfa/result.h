@@ -15,6 +15,7 @@ enum class ErrorCode {
   CompileError,     // BRDF source failed to parse or compile; see diagnostics
   Unsupported,      // valid request the device or build cannot do
   DeviceError,      // Vulkan failed (out of memory, device lost, ...)
+  OverBudget,       // the request needs more of a server-wide budget (memory) than is left
   Internal,         // a bug: an invariant did not hold
 };
 

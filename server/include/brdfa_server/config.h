@@ -28,6 +28,7 @@ struct ServerConfig {
   uint64_t maxAssetsBytes = 4ull << 30;       // --max-assets-bytes: all stored upload files together
   int compileTimeoutSec = 5;                  // --compile-timeout: one GLSL compile's wall clock
   int compileMemoryMiB = 1024;                // --compile-memory: one GLSL compile's memory
+  uint64_t maxMemoryMiB = 0;                  // --max-memory: all sessions' render targets; 0: half the RAM
   // --environment-dir (repeatable): folders whose *.exr become read-only environments
   // `blender_<stem>`. Unset: Debian blender-data's studio-light worlds, when installed.
   std::optional<std::vector<std::string>> environmentDirs;
