@@ -173,6 +173,28 @@ void collectBuiltinOverrides(const std::string& text, std::vector<std::string>& 
   }
 }
 
+// Appends to `out` every NAME of a `# define NAME` line in `text` (conditional ones too:
+// #undef of a name never defined is harmless). Preprocessor lines are whole lines.
+void collectDefinedMacros(const std::string& text, std::vector<std::string>& out) {
+  size_t at = 0;
+  while (at < text.size()) {
+    size_t end = text.find('\n', at);
+    if (end == std::string::npos) end = text.size();
+    std::string_view line(text.data() + at, end - at);
+    at = end + 1;
+    size_t i = line.find_first_not_of(" \t");
+    if (i == std::string_view::npos || line[i] != '#') continue;
+    i = line.find_first_not_of(" \t", i + 1);
+    if (i == std::string_view::npos || line.substr(i, 6) != "define") continue;
+    i = line.find_first_not_of(" \t", i + 6);
+    if (i == std::string_view::npos || !isIdentStart(line[i])) continue;
+    size_t j = i;
+    while (j < line.size() && isIdentChar(line[j])) ++j;
+    std::string name(line.substr(i, j - i));
+    if (std::find(out.begin(), out.end(), name) == out.end()) out.push_back(std::move(name));
+  }
+}
+
 }  // namespace
 
 ParamBlockLayout layoutParams(const std::vector<BrdfParam>& params) {
@@ -217,32 +239,6 @@ std::vector<uint8_t> ParamBlockLayout::pack(const BrdfDefinition& brdf,
   }
   return bytes;
 }
-
-namespace {
-
-// Appends to `out` every NAME of a `# define NAME` line in `text` (conditional ones too:
-// #undef of a name never defined is harmless). Preprocessor lines are whole lines.
-void collectDefinedMacros(const std::string& text, std::vector<std::string>& out) {
-  size_t at = 0;
-  while (at < text.size()) {
-    size_t end = text.find('\n', at);
-    if (end == std::string::npos) end = text.size();
-    std::string_view line(text.data() + at, end - at);
-    at = end + 1;
-    size_t i = line.find_first_not_of(" \t");
-    if (i == std::string_view::npos || line[i] != '#') continue;
-    i = line.find_first_not_of(" \t", i + 1);
-    if (i == std::string_view::npos || line.substr(i, 6) != "define") continue;
-    i = line.find_first_not_of(" \t", i + 6);
-    if (i == std::string_view::npos || !isIdentStart(line[i])) continue;
-    size_t j = i;
-    while (j < line.size() && isIdentChar(line[j])) ++j;
-    std::string name(line.substr(i, j - i));
-    if (std::find(out.begin(), out.end(), name) == out.end()) out.push_back(std::move(name));
-  }
-}
-
-}  // namespace
 
 AssembledProgram assembleProgram(const ProgramSpec& spec) {
   static const std::vector<BrdfParam> kNoParams;
