@@ -1,6 +1,7 @@
 #include "brdfa_server/config.h"
 
 #include <charconv>
+#include <cstdio>
 #include <cstdlib>
 #include <string_view>
 #include <type_traits>
@@ -58,9 +59,27 @@ std::string usageText(const char* program) {
          "  --compile-timeout S       seconds one GLSL compile may take (default 5)\n"
          "  --compile-memory MIB      memory one GLSL compile may use, in MiB (default 1024); a\n"
          "                            program past either budget is refused with 422\n"
+         "  --build-budget S          seconds the driver may take to build one BRDF's pipeline\n"
+         "                            (default 10)\n"
+         "  --pass-budget S           seconds one queue submission of a pass may take (default 1.5;\n"
+         "                            passes are split into submissions of about 50 ms, and every\n"
+         "                            other session waits while one runs)\n"
+         "  --check-budget S          seconds one submission of a BRDF's checks may take (default 120).\n"
+         "                            Past any budget the render worker is restarted, the BRDF is\n"
+         "                            quarantined (422 render_budget) and other sessions go on\n"
+         "  --in-process              open the device in the server's own process, without the\n"
+         "                            supervised render worker (debugging; no watchdog)\n"
          "  --max-memory MIB          memory the render targets of all sessions and renders may take\n"
          "                            together, in MiB (default: half the machine's RAM); a scene\n"
          "                            that would pass it is refused with 507\n"
+         "  --max-connections-per-address N\n"
+         "                            connections one client address may hold open at once\n"
+         "                            (default 32); past it a connection gets 503 at once. Keep it\n"
+         "                            below --threads, or one address can take every worker\n"
+         "  --request-read-timeout S  seconds a client has to send a request's line and headers,\n"
+         "                            counted from the connection's accept or the previous response\n"
+         "                            (default 10); the body gets S more, plus 1 s per 16 KiB\n"
+         "                            received. A client too slow is disconnected\n"
          "  --environment-dir DIR     register every *.exr in DIR that the renderer can read as the\n"
          "                            read-only environment blender_<name>; repeatable (default:\n"
          "                            Debian blender-data's\n"
@@ -91,6 +110,10 @@ ParseOutcome parse_command_line(int argc, const char* const* argv) {
       config.loadCache = false;
       continue;
     }
+    if (arg == "--in-process") {
+      config.inProcess = true;
+      continue;
+    }
     if (arg == "--hot-load") {
       config.hotLoad = true;
       continue;
@@ -116,6 +139,21 @@ ParseOutcome parse_command_line(int argc, const char* const* argv) {
         return std::string(name) + " must be an integer in " + std::to_string(lo) + ".." + std::to_string(hi) +
                ", got '" + *v + "'";
       dst = static_cast<std::remove_reference_t<decltype(dst)>>(*n);
+      return std::nullopt;
+    };
+    // A number of seconds in lo..hi, fractions allowed.
+    auto takeSeconds = [&](double lo, double hi, double& dst) -> std::optional<std::string> {
+      auto v = takeValue();
+      if (!v) return std::string(name) + " needs a value";
+      char* end = nullptr;
+      const double s = std::strtod(v->c_str(), &end);
+      if (v->empty() || end != v->c_str() + v->size() || !(s >= lo && s <= hi))
+      {
+        char range[64];
+        std::snprintf(range, sizeof range, "%g..%g", lo, hi);
+        return std::string(name) + " must be a number of seconds in " + range + ", got '" + *v + "'";
+      }
+      dst = s;
       return std::nullopt;
     };
     auto takeString = [&](std::string& dst) -> std::optional<std::string> {
@@ -156,8 +194,18 @@ ParseOutcome parse_command_line(int argc, const char* const* argv) {
       err = takeInt(1, 600, config.compileTimeoutSec);
     else if (name == "--compile-memory")
       err = takeInt(64, 1 << 20, config.compileMemoryMiB);
+    else if (name == "--build-budget")
+      err = takeSeconds(0.1, 3600, config.buildBudgetSec);
+    else if (name == "--pass-budget")
+      err = takeSeconds(0.1, 3600, config.passBudgetSec);
+    else if (name == "--check-budget")
+      err = takeSeconds(0.1, 3600, config.checkBudgetSec);
     else if (name == "--max-memory")
       err = takeInt(16, 1ll << 30, config.maxMemoryMiB);
+    else if (name == "--max-connections-per-address")
+      err = takeInt(1, 1'000'000, config.maxConnectionsPerAddress);
+    else if (name == "--request-read-timeout")
+      err = takeInt(1, 3600, config.requestReadTimeoutSec);
     else if (name == "--environment-dir") {
       std::string dir;
       err = takeString(dir);

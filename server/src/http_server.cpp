@@ -2,6 +2,7 @@
 
 #include <httplib.h>
 
+#include "brdfa_server/connection_guard.h"
 #include "brdfa_server/request_body.h"
 #include "brdfa_server/service.h"
 #include "routes.h"
@@ -21,12 +22,20 @@ Result<std::unique_ptr<HttpServer>> HttpServer::create(const ServerConfig& confi
   std::unique_ptr<HttpServer> out(new HttpServer());
   out->config_ = config;
   out->service_ = std::move(service.value());
-  out->http_ = std::make_unique<httplib::Server>();
+  // Every stream client holds one worker for as long as it watches; slow or greedy clients
+  // hold one for no longer than the read deadline (connection_guard.h).
+  ConnectionLimits limits;
+  limits.threads = static_cast<size_t>(config.threads);
+  limits.maxPerAddress = config.maxConnectionsPerAddress;
+  limits.requestReadTimeout = std::chrono::seconds(config.requestReadTimeoutSec);
+  if (config.maxConnectionsPerAddress >= config.threads)
+    log.push_back("warning: --max-connections-per-address " + std::to_string(config.maxConnectionsPerAddress) +
+                  " is not below --threads " + std::to_string(config.threads) +
+                  ": one client address can hold every worker until the read deadline");
+  out->http_ = std::make_unique<GuardedServer>(limits);
+  out->service_->connections = &out->http_->connections();
   httplib::Server& http = *out->http_;
 
-  // Every stream client holds one worker for as long as it watches.
-  size_t threads = static_cast<size_t>(config.threads);
-  http.new_task_queue = [threads] { return new httplib::ThreadPool(threads); };
   // Uploads need more than a JSON body; the JSON and .brdf routes check their own, smaller
   // limits (readJsonBody, readBrdfTextBody), the upload route its file limit.
   http.set_payload_max_length(out->service_->maxRequestBody());
@@ -52,6 +61,7 @@ Result<int> HttpServer::bind() {
   } else if (!http_->bind_to_port(config_.host, port)) {
     return makeError(ErrorCode::InvalidArgument, "cannot bind " + config_.host + ":" + std::to_string(port));
   }
+  http_->widenBacklog(SOMAXCONN);
   return port;
 }
 

@@ -1,8 +1,10 @@
 // POST /api/render: one-shot, stateless. Body either {"scene": {...}, "spp": N, "format": ...,
 // "brdf_source": ...} or the scene's own fields at the top level next to those keys.
 #include <cmath>
+#include <cstdio>
 
 #include "brdfa/image_codec.h"
+#include "brdfa_server/connection_guard.h"
 #include "brdfa_server/http_errors.h"
 #include "brdfa_server/request_body.h"
 #include "routes.h"
@@ -173,6 +175,13 @@ void registerRenderRoutes(httplib::Server& server, Service& service) {
     // reports convergence, which must not turn into an endless loop on a worker thread.
     for (int passes = 0;; ++passes) {
       if (service.stopping) return sendError(res, 503, "unavailable", "server is shutting down");
+      // A client that hung up gets nothing from the remaining passes: give the slot to the
+      // next render now rather than when this one would have finished.
+      if (service.connections && service.connections->peerClosed(req.remote_addr, req.remote_port)) {
+        std::fprintf(stderr, "render: client %s:%d closed the connection; one-shot render stopped after %d passes\n",
+                     req.remote_addr.c_str(), req.remote_port, passes);
+        return sendError(res, 499, "client_closed", "the client closed the connection before the render finished");
+      }
       if (passes > spp)
         return sendError(res, 500, "internal", "renderer did not converge after " + std::to_string(passes) + " passes");
       Result<FrameStats> pass = v.renderPass();

@@ -28,7 +28,15 @@ struct ServerConfig {
   uint64_t maxAssetsBytes = 4ull << 30;       // --max-assets-bytes: all stored upload files together
   int compileTimeoutSec = 5;                  // --compile-timeout: one GLSL compile's wall clock
   int compileMemoryMiB = 1024;                // --compile-memory: one GLSL compile's memory
+  // The render worker's watchdog (issue 12, remote_renderer.h); --in-process turns it off.
+  double buildBudgetSec = 10;                 // --build-budget: one pipeline build
+  double passBudgetSec = 1.5;                 // --pass-budget: one queue submission of a pass
+  double checkBudgetSec = 120;                // --check-budget: one submission of a BRDF check
+  bool inProcess = false;                     // --in-process: no render worker
   uint64_t maxMemoryMiB = 0;                  // --max-memory: all sessions' render targets; 0: half the RAM
+  // Slow or greedy clients (issue 12): see ConnectionLimits in connection_guard.h.
+  int maxConnectionsPerAddress = 32;          // --max-connections-per-address: open at once
+  int requestReadTimeoutSec = 10;             // --request-read-timeout: to receive one request
   // --environment-dir (repeatable): folders whose *.exr become read-only environments
   // `blender_<stem>`. Unset: Debian blender-data's studio-light worlds, when installed.
   std::optional<std::vector<std::string>> environmentDirs;

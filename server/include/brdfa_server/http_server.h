@@ -15,6 +15,7 @@ class Server;
 namespace brdfa::server {
 
 struct Service;
+class GuardedServer;
 
 class HttpServer {
  public:
@@ -35,7 +36,7 @@ class HttpServer {
  private:
   HttpServer() = default;
   std::unique_ptr<Service> service_;
-  std::unique_ptr<httplib::Server> http_;
+  std::unique_ptr<GuardedServer> http_;  // httplib::Server with connection limits
   ServerConfig config_;
 };
 

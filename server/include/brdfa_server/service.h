@@ -22,6 +22,8 @@
 
 namespace brdfa::server {
 
+class ConnectionRegistry;
+
 // Limits that keep one client from starving the others (DESIGN.md section 6).
 inline constexpr size_t kMaxSessions = 32;                  // including `default`; 429 beyond
 inline constexpr int kMaxStreams = 48;                      // concurrent stream clients; 503 beyond
@@ -91,6 +93,9 @@ struct Service {
   std::atomic<int> activeStreams{0};
   std::atomic<int> frameWaiters{0};
   std::atomic<bool> stopping{false};
+  // The HTTP front's open connections (set by HttpServer; null without one): a long handler
+  // asks it whether its client went away.
+  const ConnectionRegistry* connections = nullptr;
 };
 
 // The scene of the `default` session: one GGX sphere under the sky, 512x512.
