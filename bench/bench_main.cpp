@@ -1,6 +1,6 @@
 // brdfa-bench: prints the figures DESIGN.md section 5 asks for, as medians, in one run: the
 // renderer's (library level) and the service's (through the real server over loopback HTTP).
-//   brdfa-bench [--rounds N] [--source DIR] [--only renderer|scenes|sampling|http] [--scene TEXT]
+//   brdfa-bench [--rounds N] [--source DIR] [--only renderer|scenes|sampling|split|http] [--scene TEXT]
 #include <cstdio>
 #include <cstdlib>
 #include <algorithm>
@@ -10,6 +10,7 @@
 #include "bench_renderer.h"
 #include "bench_sampling.h"
 #include "bench_scenes.h"
+#include "bench_split.h"
 
 int main(int argc, char** argv) {
   std::string source = BRDFA_SOURCE_DIR;
@@ -22,7 +23,7 @@ int main(int argc, char** argv) {
     else if (a == "--only" && i + 1 < argc) only = argv[++i];
     else if (a == "--scene" && i + 1 < argc) sceneFilter = argv[++i];  // sampling scenes whose label holds TEXT
     else {
-      std::fprintf(stderr, "usage: brdfa-bench [--rounds N] [--source DIR] [--only renderer|scenes|sampling|http] [--scene TEXT]\n");
+      std::fprintf(stderr, "usage: brdfa-bench [--rounds N] [--source DIR] [--only renderer|scenes|sampling|split|http] [--scene TEXT]\n");
       return 2;
     }
   }
@@ -31,6 +32,7 @@ int main(int argc, char** argv) {
   if (wanted("renderer") && (code = brdfa::bench::runRendererBench(source, rounds)) != 0) return code;
   if (wanted("scenes") && (code = brdfa::bench::runSceneBench(source, rounds)) != 0) return code;
   if (wanted("sampling") && (code = brdfa::bench::runSamplingBench(source, std::max(1, rounds / 5), sceneFilter)) != 0) return code;
+  if (wanted("split") && (code = brdfa::bench::runSplitBench(source, rounds)) != 0) return code;
   if (wanted("http")) code = brdfa::bench::runHttpBench(BRDFA_SERVER_BINARY, source);
   return code;
 }

@@ -19,6 +19,17 @@ namespace {
 constexpr uint32_t kShadeGroup = 8;     // local size of shade/background kernels
 constexpr uint32_t kResolveGroup = 16;  // local size of the resolve kernel
 constexpr double kErrorRefreshMs = 200; // rel_error is refreshed at least this often while rendering
+// Splitting a pass into submissions (see renderPass). A view's first submission after its
+// shading changed is a probe of kProbeUnits cost units (pixel-samples): about 0.3 ms for a
+// plain BRDF on lavapipe (2 cores), 60-120 ms for tests/hostile/slow_loop.brdf (300x lambert:
+// the most llvmpipe runs, 65535 loop rounds per invocation). Later submissions are sized
+// from the measured cost, growing at most kGrowth times the largest measured one; the cost
+// falls by at most kCostDecay per submission (see renderPass).
+constexpr double kProbeUnits = 2048;
+constexpr double kGrowth = 4;
+constexpr double kCostDecay = 0.75;
+constexpr double kDispatchMs = 1;  // see renderPass
+constexpr double kTail = 1.25;     // a pass's last submission may take this many budgets
 
 uint32_t groups(uint32_t n, uint32_t size) { return (n + size - 1) / size; }
 
@@ -344,6 +355,10 @@ Result<void> RenderViewImpl::setScene(const Scene& scene) {
   for (size_t i = 0; i < objects.size(); ++i)
     objects[i].pixels = screenBounds(viewProj, modelMatrix(scene.objects[i]), objects[i].mesh->boundsMin,
                                      objects[i].mesh->boundsMax, width, height);
+  if (geometryChanged)
+    coverageKnown_ = false;
+  else  // the coverage depends on the geometry only
+    for (size_t i = 0; i < objects.size(); ++i) objects[i].cover = std::move(objects_[i].cover);
   releaseObjects(objects_);
   objects_ = std::move(objects);
   scene_ = scene;
@@ -355,6 +370,9 @@ Result<void> RenderViewImpl::setScene(const Scene& scene) {
   // redraw the background. A new BRDF or parameters keep both: the first pass overwrites the
   // object pixels instead (see the shade kernel), which is cheaper.
   if (geometryChanged || lightingChanged) clearPending_ = true;
+  // What a submission costs is relearned when what the shading runs changed (a parameter can
+  // be a loop count); a camera move keeps it.
+  if (!sameShading) msPerUnit_ = maxUnits_ = 0;
   if (restart) {
     const uint64_t version = stats_.sceneVersion;
     stats_ = FrameStats{};
@@ -551,6 +569,37 @@ void RenderViewImpl::setRelError(const ErrorSums& sums) {
   sinceErrorMs_ = 0;
 }
 
+// Covered pixels of each object's 8x8 workgroups in G-buffer slice 0, where the host can read
+// it (CPU devices, whose resolve runs on the host): a tile's cost is in proportion to them, not
+// to its area, since an invocation off the object returns at once and an object's bounds can
+// be half empty (a sphere's corners, a torus).
+void RenderViewImpl::measureCoverage() {
+  coverageKnown_ = true;
+  const auto* positions = static_cast<const float*>(gbuffer_.mapped());
+  if (!positions) return;  // device-local: every invocation counts as covered
+  for (size_t i = 0; i < objects_.size(); ++i) {
+    ObjectState& o = objects_[i];
+    const PixelRect& r = o.pixels;
+    const uint32_t gx = groups(r.width, kShadeGroup);
+    o.cover.assign(size_t(gx) * groups(r.height, kShadeGroup), 0);
+    for (uint32_t y = r.y; y < r.y + r.height; ++y)
+      for (uint32_t x = r.x; x < r.x + r.width; ++x)
+        if (static_cast<uint32_t>(std::abs(positions[4 * (size_t(y) * width_ + x) + 3]) + 0.5f) == i + 1)
+          ++o.cover[size_t((y - r.y) / kShadeGroup) * gx + (x - r.x) / kShadeGroup];
+  }
+}
+
+// A pass is split into submissions of about ctx().submissionTargetMs() of device time each, so
+// that between two of them the other views' submissions get the queue (VkContext hands it over
+// in arrival order): a heavy scene slows its own view, not the others. Each submission shades
+// a run of tiles: whole rows of 8x8 workgroups of an object's bounds, or part of one row.
+// Tiles start on the object's workgroup grid, so they are disjoint and together dispatch
+// exactly the workgroups of the unsplit dispatch (the kernel only bounds-checks against the
+// image: a tile ending mid-group inside the bounds would shade some pixels twice).
+// Where one workgroup at the pass's sample count would already pass the target, the samples
+// are split too: the pass sweeps the objects several times, each sweep taking the next samples
+// of the sequence (frame[2] advanced), so a pass still adds `count` samples to every pixel and
+// the result differs from the unsplit pass only in the order of float additions.
 Result<FrameStats> RenderViewImpl::renderPass() {
   std::lock_guard<std::mutex> lock(mutex_);
   if (!hasScene_) return makeError(ErrorCode::InvalidArgument, "no scene has been set");
@@ -563,56 +612,176 @@ Result<FrameStats> RenderViewImpl::renderPass() {
   const uint64_t ramp = stats_.passes < 20 ? (uint64_t(1) << stats_.passes) : UINT64_MAX;
   const uint32_t count = static_cast<uint32_t>(std::min<uint64_t>(
       {static_cast<uint64_t>(scene_.render.samplesPerFrame), ramp, maxSamples - stats_.spp}));
-  auto begun = cmd_.begin();
-  if (!begun) return begun.takeError();
-  VkCommandBuffer cb = *begun;
   const uint32_t slice = sliceForPass(stats_.passes);
-  recordPending(cb, slice);
-
-  ComputePush push = basePush();
-  push.frame[2] = static_cast<uint32_t>(stats_.spp);  // the sequence continues across passes
-  push.frame[3] = count;
-  push.target[3] = stats_.passes == 0 ? 1u : 0u;                // first pass: overwrite, not add
-  const VkPipelineLayout layout = r_->computeLayout();
-  vkCmdBindDescriptorSets(cb, VK_PIPELINE_BIND_POINT_COMPUTE, layout, 0, 1, &viewSets_[slice], 0, nullptr);
-  // Objects cover disjoint pixels, so their dispatches need no barrier between them. Each runs
-  // over its screen bounds only: every pixel visited costs G-buffer loads even when it is not
-  // the object's.
-  for (size_t i = 0; i < objects_.size(); ++i) {
-    const PixelRect& rect = objects_[i].pixels;
-    if (rect.width == 0 || rect.height == 0) continue;  // off screen
-    push.target[0] = static_cast<uint32_t>(i + 1);
-    push.target[2] = rect.x | (rect.y << 16);  // dispatch origin; images are at most 4096 wide
-    vkCmdBindPipeline(cb, VK_PIPELINE_BIND_POINT_COMPUTE, objects_[i].kernel->kernel->pipeline());
-    vkCmdBindDescriptorSets(cb, VK_PIPELINE_BIND_POINT_COMPUTE, layout, 1, 1, &objects_[i].set, 0, nullptr);
-    vkCmdPushConstants(cb, layout, VK_SHADER_STAGE_COMPUTE_BIT, 0, sizeof(push), &push);
-    vkCmdDispatch(cb, groups(rect.width, kShadeGroup), groups(rect.height, kShadeGroup), 1);
-  }
-  // Inside the objects' bounds a pixel may be background in this slice and covered in another
-  // (an edge): its background samples are taken with the pass, so the pixel is the average over
-  // its sub-pixel positions. With one slice nothing changes from pass to pass there.
-  if (jitterCount_ > 1)
-    recordBackground(cb, coverRect_, slice, count, stats_.passes == 0);
-  // Refresh the error estimate in the same submission when it is due (and a second half exists).
+  const bool firstPass = stats_.passes == 0;
+  // Refresh the error estimate in the last submission when it is due (and a second half exists).
   const bool refreshError = stats_.passes >= 1 &&
                             (sinceErrorMs_ >= kErrorRefreshMs || stats_.spp + count >= maxSamples);
-  if (refreshError && !r_->hostResolve()) {
-    memoryBarrier(cb, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_ACCESS_SHADER_WRITE_BIT,
-                  VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_ACCESS_SHADER_READ_BIT);
-    recordResolve(cb, false);
-  }
-  memoryBarrier(cb, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_ACCESS_SHADER_WRITE_BIT,
-                VK_PIPELINE_STAGE_HOST_BIT, VK_ACCESS_HOST_READ_BIT);
-  BRDFA_TRY(cmd_.submitAndWait());
-  clearPending_ = false;
 
-  const double ms = msSince(t0);
+  // Cost in units: one per sample of a covered pixel. An invocation off the object costs next
+  // to nothing against a loop-heavy BRDF's sample, the case the split is for; one unit per
+  // workgroup keeps empty tiles from being free.
+  const double groupPixels = kShadeGroup * kShadeGroup;
+  auto groupUnits = [&](const ObjectState& o, size_t group, uint32_t n) {
+    return (o.cover.empty() ? groupPixels : o.cover[group]) * n + 1.0;
+  };
+  const double targetMs = r_->ctx().submissionTargetMs();
+  uint32_t chunk = count;  // samples per sweep
+  if (targetMs > 0 && msPerUnit_ > 0)
+    chunk = static_cast<uint32_t>(
+        std::clamp(std::floor(targetMs / msPerUnit_ / groupPixels), 1.0, double(count)));
+  std::vector<size_t> visible;  // objects on screen
+  double passUnits = 0;         // to let the last submission take up to kTail budgets
+  for (size_t i = 0; i < objects_.size(); ++i) {
+    const ObjectState& o = objects_[i];
+    if (o.pixels.width == 0 || o.pixels.height == 0) continue;
+    visible.push_back(i);
+    const size_t n = size_t(groups(o.pixels.width, kShadeGroup)) * groups(o.pixels.height, kShadeGroup);
+    for (size_t g = 0; g < n; ++g) passUnits += groupUnits(o, g, count);
+  }
+
+  ComputePush push = basePush();
+  const VkPipelineLayout layout = r_->computeLayout();
+  // Where the sweep stands: samples done, visible object, workgroup row and column in its bounds.
+  uint32_t done = visible.empty() ? count : 0, row = 0, col = 0;
+  size_t obj = 0;
+  std::vector<double> bandUnits;
+  double passDone = 0;  // units shaded so far
+  uint64_t submissions = 0;
+  double maxSubmissionMs = 0;
+  do {
+    // Slice 0 recorded by an earlier submission (all waited for) is on the host's side now.
+    if (targetMs > 0 && !coverageKnown_ && (slicesReady_ & 1u)) measureCoverage();
+    // A submission that rasterizes slice 0 shades nothing where the host will read the
+    // coverage from it: shading before that would be sized by the bounds' area.
+    const bool rasterOnly = targetMs > 0 && !coverageKnown_ && gbuffer_.mapped() && (slicesReady_ & 1u) == 0;
+    auto begun = cmd_.begin();
+    if (!begun) return begun.takeError();
+    VkCommandBuffer cb = *begun;
+    if (submissions == 0)
+      recordPending(cb, slice);
+    else  // the accumulators are read-modify-written; earlier submissions' writes come first
+      memoryBarrier(cb, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_ACCESS_SHADER_WRITE_BIT,
+                    VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_ACCESS_SHADER_READ_BIT | VK_ACCESS_SHADER_WRITE_BIT);
+    vkCmdBindDescriptorSets(cb, VK_PIPELINE_BIND_POINT_COMPUTE, layout, 0, 1, &viewSets_[slice], 0, nullptr);
+    // The units this submission may take: no measurement yet, a probe; then what the target
+    // allows at the measured cost, growing at most kGrowth times the largest measured
+    // submission (a cost measured where the objects are thin can be too low).
+    const double sized = targetMs <= 0     ? INFINITY
+                         : msPerUnit_ <= 0 ? kProbeUnits
+                                           : std::min(targetMs / msPerUnit_, kGrowth * maxUnits_);
+    // No small last submission: its fixed costs would come on top for little.
+    const double budget = msPerUnit_ > 0 && passUnits - passDone <= kTail * sized ? INFINITY : sized;
+    double units = 0;
+    while (done < count && !rasterOnly) {
+      const size_t i = visible[obj];
+      const ObjectState& o = objects_[i];
+      const uint32_t gx = groups(o.pixels.width, kShadeGroup), gy = groups(o.pixels.height, kShadeGroup);
+      const uint32_t n = std::min(chunk, count - done);
+      // Whole rows of workgroups while they fit, else part of one row (at least one workgroup
+      // per submission).
+      uint32_t cols = 0, rows = 0;
+      double taken = 0;
+      bandUnits.clear();  // of each row taken
+      if (col == 0) {
+        for (uint32_t r = row; r < gy; ++r, ++rows) {
+          double rowUnits = 0;
+          for (uint32_t c = 0; c < gx; ++c) rowUnits += groupUnits(o, size_t(r) * gx + c, n);
+          if (units + taken + rowUnits > budget) break;
+          taken += rowUnits;
+          bandUnits.push_back(rowUnits);
+        }
+        if (rows > 0) cols = gx;
+      }
+      if (rows == 0) {
+        // A part of a row only where one row alone passes the budget: a tile's left and right
+        // halves differ more than a row's (see the dispatches below).
+        if (col == 0 && units > 0) break;
+        rows = 1;
+        for (uint32_t c = col; c < gx; ++c, ++cols) {
+          const double g = groupUnits(o, size_t(row) * gx + c, n);
+          if (units + taken + g > budget && (cols > 0 || units > 0)) break;
+          taken += g;
+        }
+        if (cols == 0) break;  // this submission is full
+      }
+      push.target[0] = static_cast<uint32_t>(i + 1);
+      push.target[3] = firstPass && done == 0 ? 1u : 0u;  // first pass: overwrite, not add (per pixel)
+      push.frame[2] = static_cast<uint32_t>(stats_.spp + done);  // the sequence continues across passes
+      push.frame[3] = n;
+      vkCmdBindPipeline(cb, VK_PIPELINE_BIND_POINT_COMPUTE, o.kernel->kernel->pipeline());
+      vkCmdBindDescriptorSets(cb, VK_PIPELINE_BIND_POINT_COMPUTE, layout, 1, 1, &o.set, 0, nullptr);
+      // A band of rows is dispatched a few rows at a time unless it is the whole bounds:
+      // llvmpipe hands each thread one contiguous run of a dispatch's workgroups (lp_cs_tpool:
+      // two halves on two cores), and a band's top and bottom halves can differ in cost
+      // several times over (near a sphere's pole), while adjacent rows, or the whole object's
+      // top and bottom, are alike. Rows are grouped until a dispatch has kDispatchMs of work,
+      // which keeps the per-dispatch cost (~35 us on lavapipe) small. Measured (lambert, 64
+      // samples/pass, 2 submissions): one dispatch per band cost 25% of the throughput.
+      for (uint32_t r = 0, k; r < rows; r += k) {
+        double work = rows > 1 ? bandUnits[r] : 0;
+        for (k = 1; r + k < rows && (rows == gy || work * msPerUnit_ < kDispatchMs); ++k) work += bandUnits[r + k];
+        // Dispatch origin; images are at most 4096 wide.
+        push.target[2] = (o.pixels.x + col * kShadeGroup) | ((o.pixels.y + (row + r) * kShadeGroup) << 16);
+        vkCmdPushConstants(cb, layout, VK_SHADER_STAGE_COMPUTE_BIT, 0, sizeof(push), &push);
+        vkCmdDispatch(cb, cols, k, 1);
+      }
+      units += taken;
+      // Objects cover disjoint pixels, so their dispatches need no barrier between them; the
+      // next sweep adds to the same pixels and does.
+      col += cols;
+      if (col == gx) {
+        col = 0;
+        row += rows;
+      }
+      if (row < gy) continue;
+      row = 0;
+      if (++obj < visible.size()) continue;
+      obj = 0;
+      done += n;
+      if (done < count)
+        memoryBarrier(cb, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_ACCESS_SHADER_WRITE_BIT,
+                      VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_ACCESS_SHADER_READ_BIT | VK_ACCESS_SHADER_WRITE_BIT);
+    }
+    if (done >= count) {
+      // Inside the objects' bounds a pixel may be background in this slice and covered in
+      // another (an edge): its background samples are taken with the pass, so the pixel is the
+      // average over its sub-pixel positions. With one slice nothing changes from pass to pass.
+      if (jitterCount_ > 1) recordBackground(cb, coverRect_, slice, count, firstPass);
+      if (refreshError && !r_->hostResolve()) {
+        memoryBarrier(cb, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_ACCESS_SHADER_WRITE_BIT,
+                      VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_ACCESS_SHADER_READ_BIT);
+        recordResolve(cb, false);
+      }
+    }
+    memoryBarrier(cb, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_ACCESS_SHADER_WRITE_BIT,
+                  VK_PIPELINE_STAGE_HOST_BIT, VK_ACCESS_HOST_READ_BIT);
+    double ms = 0;
+    BRDFA_TRY(cmd_.submitAndWait(&ms));
+    clearPending_ = false;
+    ++submissions;
+    maxSubmissionMs = std::max(maxSubmissionMs, ms);
+    // The cost is learned from submissions that filled most of their budget: a pass's small
+    // remainder would read as expensive (fixed costs: G-buffer raster, background, resolve) and
+    // shrink the next pass's first submission for nothing. A slow one always counts. The cost
+    // rises at once but falls by at most kCostDecay per submission: where an object is thin
+    // (the bottom of a sphere, before the next pass starts at its top) its covered pixels are
+    // few and the measure is noisy, and a low reading would make the next submission too long.
+    passDone += units;
+    if (units > 0 && (msPerUnit_ <= 0 || units >= 0.5 * sized || ms > targetMs))
+      msPerUnit_ = std::max(ms / units, kCostDecay * msPerUnit_);
+    maxUnits_ = std::max(maxUnits_, units);
+  } while (done < count);
+
+  const double passMs = msSince(t0);
   stats_.spp += count;
   stats_.passes += 1;
-  stats_.elapsedMs += ms;
-  stats_.lastPassMs = ms;
+  stats_.elapsedMs += passMs;
+  stats_.lastPassMs = passMs;
+  stats_.submissions = submissions;
+  stats_.maxSubmissionMs = maxSubmissionMs;
   stats_.nanSamples = *static_cast<const uint32_t*>(counters_.mapped());
-  sinceErrorMs_ += ms;
+  sinceErrorMs_ += passMs;
   if (refreshError)
     setRelError(r_->hostResolve() ? resolveOnHost(hostResolveInput(), nullptr, nullptr) : deviceErrorSums());
   updateDone();

@@ -35,6 +35,9 @@ class RenderViewImpl final : public RenderView {
     Buffer transform;  // ObjectUniform
     VkDescriptorSet set = VK_NULL_HANDLE;
     PixelRect pixels;  // where the shading dispatch runs (the object's screen bounds)
+    // Covered pixels of each 8x8 workgroup of `pixels`, row-major (empty: not measured, count
+    // all 64): what a tile of the split pass costs (see measureCoverage).
+    std::vector<uint32_t> cover;
   };
 
   Result<void> resize(uint32_t width, uint32_t height);
@@ -57,6 +60,7 @@ class RenderViewImpl final : public RenderView {
   // Entries of the error partial-sum buffer: one per subgroup of each resolve workgroup.
   size_t partialCount(uint32_t width, uint32_t height) const;
   ComputePush basePush() const;
+  void measureCoverage();
 
   std::shared_ptr<RendererImpl> r_;
   mutable std::mutex mutex_;
@@ -83,6 +87,13 @@ class RenderViewImpl final : public RenderView {
   std::shared_ptr<const GpuEnvironment> env_;
   std::vector<ObjectState> objects_;
   bool clearPending_ = true;
+  // Splitting passes into submissions of about ctx().submissionTargetMs() (see renderPass): the
+  // device cost of shading learned from this view's own submissions, in ms per cost unit (about
+  // a pixel-sample; 0: not measured since the shading last changed), and the largest
+  // submission measured so far in those units (growth is bounded by a multiple of it).
+  double msPerUnit_ = 0;
+  double maxUnits_ = 0;
+  bool coverageKnown_ = false;  // ObjectState::cover is measured for the current geometry
   double sinceErrorMs_ = 0;  // pass time since rel_error was last refreshed
   FrameStats stats_;
 };

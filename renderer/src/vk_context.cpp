@@ -1,9 +1,12 @@
 #include "vk_context.h"
 
 #include <algorithm>
+#include <chrono>
 #include <cstring>
+#include <optional>
 #include <vector>
 
+#include "device_activity.h"
 #include "vk_check.h"
 
 namespace brdfa {
@@ -145,6 +148,7 @@ Result<std::unique_ptr<VkContext>> VkContext::create(const RendererOptions& opti
     return makeError(ErrorCode::Unsupported, std::string(ctx->properties_.deviceName) +
                                                  ": needs Vulkan 1.1 subgroup arithmetic in compute shaders");
   ctx->subgroupSize_ = subgroup.subgroupSize;
+  ctx->submissionTargetMs_ = std::max(0.0, options.submissionTargetMs);
 
   const auto& p = ctx->properties_;
   ctx->info_.name = p.deviceName;
@@ -178,16 +182,31 @@ Result<uint32_t> VkContext::findMemoryType(uint32_t typeBits, VkMemoryPropertyFl
   return makeError(ErrorCode::DeviceError, "no suitable Vulkan memory type");
 }
 
-Result<void> VkContext::submitAndWait(VkCommandBuffer commands, VkFence fence) {
+Result<void> VkContext::submitAndWait(VkCommandBuffer commands, VkFence fence, double* busyMs) {
   BRDFA_VK_TRY(vkResetFences(device_, 1, &fence));
   VkSubmitInfo si{VK_STRUCTURE_TYPE_SUBMIT_INFO};
   si.commandBufferCount = 1;
   si.pCommandBuffers = &commands;
-  {
-    std::lock_guard<std::mutex> lock(queueMutex_);
-    BRDFA_VK_TRY(vkQueueSubmit(queue_, 1, &si, fence));
+  // In flight from its place in the queue's order until its fence signals (device_activity.h).
+  std::optional<device_activity::Scope> inFlight;
+  std::unique_lock<std::mutex> lock(queueMutex_);
+  const uint64_t ticket = nextTicket_++;
+  queueTurn_.wait(lock, [&] { return serving_ == ticket; });
+  inFlight.emplace(device_activity::Kind::Submission);
+  lock.unlock();
+  const auto start = std::chrono::steady_clock::now();
+  VkResult r = vkQueueSubmit(queue_, 1, &si, fence);
+  const char* what = "vkQueueSubmit";
+  if (r == VK_SUCCESS) {
+    r = vkWaitForFences(device_, 1, &fence, VK_TRUE, UINT64_MAX);
+    what = "vkWaitForFences";
   }
-  BRDFA_VK_TRY(vkWaitForFences(device_, 1, &fence, VK_TRUE, UINT64_MAX));
+  if (busyMs) *busyMs = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+  lock.lock();
+  ++serving_;
+  lock.unlock();
+  queueTurn_.notify_all();
+  if (r != VK_SUCCESS) return vkError(r, what);
   return {};
 }
 

@@ -3,6 +3,8 @@
 
 #include <vulkan/vulkan.h>
 
+#include <condition_variable>
+#include <cstdint>
 #include <memory>
 #include <mutex>
 #include <string>
@@ -33,9 +35,17 @@ class VkContext {
   Result<uint32_t> findMemoryType(uint32_t typeBits, VkMemoryPropertyFlags required,
                                   VkMemoryPropertyFlags preferred = 0) const;
 
-  // Submits one command buffer (the queue is shared by every view: submission is serialized)
-  // and waits on `fence` outside the queue lock, so views render concurrently.
-  Result<void> submitAndWait(VkCommandBuffer commands, VkFence fence);
+  // Submits one command buffer and waits on `fence`. The queue is shared by every view and
+  // taken in turns, in arrival order, from the submission until its fence signals: so a view
+  // whose pass is split into several submissions lets every view that asked meanwhile go in
+  // between, and `busyMs` (optional) is this submission's own device time. (Released right
+  // after vkQueueSubmit, lavapipe's queue thread would still run submissions in order, but the
+  // wait would include the others' work; lavapipe's timestamp queries read ~0 for long
+  // dispatches.) Recording, on the host, still runs concurrently.
+  Result<void> submitAndWait(VkCommandBuffer commands, VkFence fence, double* busyMs = nullptr);
+
+  // RendererOptions::submissionTargetMs: device time one submission of a pass aims at.
+  double submissionTargetMs() const { return submissionTargetMs_; }
 
  private:
   VkContext() = default;
@@ -48,7 +58,14 @@ class VkContext {
   VkPhysicalDeviceMemoryProperties memory_{};
   DeviceInfo info_;
   uint32_t subgroupSize_ = 1;
+  double submissionTargetMs_ = 0;
+  // The queue's turn (see submitAndWait): a ticket lock rather than a mutex held through the
+  // wait, since a view that submits again right after its fence signals would usually win a
+  // plain mutex back before a waiting thread wakes up, and starve the others.
   std::mutex queueMutex_;
+  std::condition_variable queueTurn_;
+  uint64_t nextTicket_ = 0;  // handed to the next submitter
+  uint64_t serving_ = 0;     // whose turn it is
 };
 
 }  // namespace brdfa

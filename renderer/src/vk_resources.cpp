@@ -194,9 +194,9 @@ Result<VkCommandBuffer> CommandContext::begin() {
   return commands_;
 }
 
-Result<void> CommandContext::submitAndWait() {
+Result<void> CommandContext::submitAndWait(double* busyMs) {
   BRDFA_VK_TRY(vkEndCommandBuffer(commands_));
-  return ctx_->submitAndWait(commands_, fence_);
+  return ctx_->submitAndWait(commands_, fence_, busyMs);
 }
 
 void memoryBarrier(VkCommandBuffer cb, VkPipelineStageFlags src, VkAccessFlags srcAccess,

@@ -100,8 +100,8 @@ class CommandContext {
 
   // Resets and begins recording.
   Result<VkCommandBuffer> begin();
-  // Ends recording, submits and waits for completion.
-  Result<void> submitAndWait();
+  // Ends recording, submits and waits for completion; `busyMs`: see VkContext::submitAndWait.
+  Result<void> submitAndWait(double* busyMs = nullptr);
   void reset();
 
  private:

@@ -24,6 +24,10 @@ struct RendererOptions {
   std::string shaderDir;   // directory holding shaders/lib and shaders/kernels
   bool validation = false; // enable VK_LAYER_KHRONOS_validation when present
   ResolveMode resolve = ResolveMode::Auto;
+  // Device time one queue submission of a pass aims at: a pass is split into submissions of
+  // about this length, so a heavy scene cannot hold the shared queue for long (issue 12).
+  // 0: one submission per pass.
+  double submissionTargetMs = 50;
   // SPIR-V cache on disk (empty: memory only). loadCache false only writes it (--no-cache-load).
   std::string cacheDir;
   bool loadCache = true;
@@ -38,6 +42,20 @@ struct RendererOptions {
   // Memory all render views' targets (G-buffer, accumulators, outputs) may take together; a
   // view that would pass it fails with OverBudget. 0: no budget.
   uint64_t maxViewMemoryBytes = 0;
+  // Isolation (issue 12): the device lives in a supervised brdfa-render-worker process. A
+  // pipeline build past buildSeconds, one queue submission of a pass or frame read past
+  // passSeconds (passes are split into submissions of ~50 ms; a program's first submission also
+  // carries the driver's compile on lavapipe, ~0.6 s for Disney's BRDF), one submission of a
+  // check past checkSeconds, or the worker's resident memory past workerMemoryBytes, kills and
+  // restarts the worker; the program that caused it is quarantined (its requests then fail
+  // with RenderBudget naming the program and the budget) and every other view is restored from its scene on its
+  // next call. False: the device lives in this process (tests, tools).
+  bool isolate = false;
+  double buildSeconds = 10.0;
+  // While one submission runs, every other view waits: this bounds the class's frame gaps.
+  double passSeconds = 1.5;
+  double checkSeconds = 120.0;
+  uint64_t workerMemoryBytes = 0;  // 0: maxViewMemoryBytes + 2 GiB (or no limit without one)
 };
 
 struct DeviceInfo {
@@ -59,6 +77,10 @@ struct FrameStats {
   uint64_t passes = 0;        // progressive passes since the last scene change
   double elapsedMs = 0;       // render time spent since the last scene change
   double lastPassMs = 0;      // wall time of the latest pass
+  // The latest pass's queue submissions (RendererOptions::submissionTargetMs) and the device
+  // time of its longest one (wall time from submit to done where the queue has no timestamps).
+  uint64_t submissions = 0;
+  double maxSubmissionMs = 0;
   uint64_t nanSamples = 0;    // NaN/Inf samples dropped since the last scene change
   // Relative RMS error of the image, estimated from two statistically independent half
   // accumulators: sqrt(mean over object pixels of the mean's variance) / mean luminance.
@@ -123,6 +145,8 @@ struct RendererCounters {
   uint64_t pipelinesCreated = 0; // shading pipelines built (each costs a driver JIT)
   uint64_t viewMemoryBytes = 0;   // render targets of all views now
   uint64_t viewMemoryBudget = 0;  // RendererOptions::maxViewMemoryBytes (0: none)
+  uint64_t workerRestarts = 0;    // isolated renderers: render workers killed and replaced
+  uint64_t quarantinedPrograms = 0;  // isolated renderers: programs refused since (see RendererOptions)
 };
 
 // Numeric checks of one BRDF on the device (issue 3 item 6), through a compute kernel that
@@ -276,6 +300,11 @@ class Renderer {
   virtual Result<int> preloadFromCache(const BrdfDefinition& brdf) = 0;
 
   virtual RendererCounters counters() const = 0;
+
+  // For shutdown: every call in progress or made later fails promptly (DeviceError) instead of
+  // waiting for the device. Only an isolated renderer can stop its device's work; an
+  // in-process one lets calls in progress finish.
+  virtual void cancel() {}
 
   // Makes the asset file at `path` usable in scenes under `name` (a mesh, texture or
   // environment name, by kind), beside the built-ins. The file should have passed inspectAsset

@@ -1,0 +1,44 @@
+// Device work in flight, by the request it serves: what a watchdog needs to tell which request
+// holds the device (issue 12). The render worker tags each request's thread; the renderer
+// opens a Scope around every queue submission (until its fence signals) and every pipeline
+// build (the driver's shader compile). The queue runs submissions in order, so the oldest
+// submission in flight is the one running or the one every later submission waits behind.
+#pragma once
+
+#include <chrono>
+#include <cstdint>
+#include <optional>
+
+namespace brdfa::device_activity {
+
+enum class Kind { Submission, PipelineBuild };
+const char* kindName(Kind kind);  // "submission" | "pipeline build"
+
+// The tag of the calling thread's work (0: untagged, e.g. in-process renderers).
+void setThreadTag(uint64_t tag);
+uint64_t threadTag();
+
+struct Entry {
+  uint64_t tag = 0;
+  Kind kind = Kind::Submission;
+  std::chrono::steady_clock::time_point start;
+};
+
+// Registers the calling thread's work from construction to destruction.
+class Scope {
+ public:
+  explicit Scope(Kind kind);
+  ~Scope();
+  Scope(const Scope&) = delete;
+  Scope& operator=(const Scope&) = delete;
+
+ private:
+  uint64_t key_;
+};
+
+// The longest-running work now in flight, if any.
+std::optional<Entry> oldest();
+// The longest-running work of one kind now in flight, if any.
+std::optional<Entry> oldest(Kind kind);
+
+}  // namespace brdfa::device_activity
