@@ -1,12 +1,15 @@
 // Service-level figures through the real server on a loopback port: time from PUT of a new
 // BRDF to its first frame, from a parameter change to the next frame, and frames per second
-// received on the stream. What a user of the web UI waits for.
+// received on the stream (what a user of the web UI waits for); and a class of 30 sessions
+// streaming at once. Each with the render worker and, for comparison, --in-process.
 #include "bench_http.h"
 
+#include <algorithm>
 #include <chrono>
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <sstream>
+#include <thread>
 
 #include "bench_util.h"
 #include "bench_nonce.h"
@@ -20,14 +23,18 @@ using Clock = std::chrono::steady_clock;
 
 bool ok(const httplib::Result& r, int status = 200) { return r && r->status == status; }
 
-}  // namespace
+struct ServiceFigures {
+  double editMs = 0, sliderMs = 0, fps = 0;
+};
 
-int runHttpBench(const std::string& serverBinary, const std::string& sourceDir) {
+// The three figures a web UI user waits for, through a server started with `extraArgs`.
+bool measureService(const std::string& serverBinary, const std::string& sourceDir,
+                    const std::vector<std::string>& extraArgs, ServiceFigures& out) {
   testsupport::ServerProcess server;
-  std::string err = server.start(serverBinary, sourceDir);
+  std::string err = server.start(serverBinary, sourceDir, extraArgs);
   if (!err.empty()) {
     std::fprintf(stderr, "server: %s\n", err.c_str());
-    return 1;
+    return false;
   }
   auto cli = server.client(60);
   const std::string scene = "/api/sessions/default/scene";
@@ -37,7 +44,7 @@ int runHttpBench(const std::string& serverBinary, const std::string& sourceDir) 
                          {"render", {{"width", 512}, {"height", 512}, {"samples_per_frame", 4}, {"max_samples", 1048576}}}};
   if (!ok(cli->Put(scene, base.dump(), "application/json")) || !ok(cli->Get(frame))) {
     std::fprintf(stderr, "could not set up the default session\n");
-    return 1;
+    return false;
   }
 
   // A new BRDF each time: a changed constant in the code, so no cache of any kind can help.
@@ -54,7 +61,7 @@ int runHttpBench(const std::string& serverBinary, const std::string& sourceDir) 
                 ok(cli->Get(frame));
     if (!good) {
       std::fprintf(stderr, "BRDF edit round %d failed\n%s\n", i, server.logTail().c_str());
-      return 1;
+      return false;
     }
     editMs.push_back(msSince(t0));
   }
@@ -63,7 +70,7 @@ int runHttpBench(const std::string& serverBinary, const std::string& sourceDir) 
   for (int i = 0; i < 11; ++i) {
     nlohmann::json patch = {{"objects", {{{"brdf", "ggx"}, {"params", {{"roughness", 0.2 + 0.05 * i}}}}}}};
     auto t0 = Clock::now();
-    if (!ok(cli->Patch(scene, patch.dump(), "application/json")) || !ok(cli->Get(frame))) return 1;
+    if (!ok(cli->Patch(scene, patch.dump(), "application/json")) || !ok(cli->Get(frame))) return false;
     if (i > 0) sliderMs.push_back(msSince(t0));  // the first switches back to ggx (cached program)
   }
 
@@ -83,14 +90,111 @@ int runHttpBench(const std::string& serverBinary, const std::string& sourceDir) 
     if (carry.size() > 64) carry.erase(0, carry.size() - 64);
     return msSince(t0) < windowMs;
   });
-  const double fps = parts / (msSince(t0) / 1000.0);
+  out.fps = parts / (msSince(t0) / 1000.0);
+  out.editMs = median(editMs);
+  out.sliderMs = median(sliderMs);
+  return server.terminate() == 0;
+}
 
+struct ClassFigures {
+  double minFps = 0, medianFps = 0, maxFps = 0;
+  double serverRssMiB = 0;
+};
+
+// Resident memory of a process and its children (the render and compile workers), in MiB.
+double treeRssMiB(pid_t root) {
+  std::ifstream list("/proc/" + std::to_string(root) + "/task/" + std::to_string(root) + "/children");
+  double total = 0;
+  std::ifstream statm("/proc/" + std::to_string(root) + "/statm");
+  unsigned long long size = 0, resident = 0;
+  if (statm >> size >> resident) total += resident * 4096.0 / (1 << 20);
+  for (pid_t child; list >> child;) total += treeRssMiB(child);
+  return total;
+}
+
+// `sessions` sessions of the default scene, each with one stream client, for `seconds`: the
+// frames each received per second.
+bool measureClass(const std::string& serverBinary, const std::string& sourceDir, const std::vector<std::string>& extraArgs,
+                  int sessions, double seconds, ClassFigures& out) {
+  testsupport::ServerProcess server;
+  std::vector<std::string> args = extraArgs;
+  for (const char* a : {"--max-connections-per-address", "256", "--idle-timeout", "120"}) args.push_back(a);
+  if (std::string err = server.start(serverBinary, sourceDir, args); !err.empty()) {
+    std::fprintf(stderr, "server: %s\n", err.c_str());
+    return false;
+  }
+  auto cli = server.client(60);
+  nlohmann::json scene = {{"environment", {{"name", "sky"}, {"visible", true}}},
+                          {"objects", {{{"mesh", "sphere"}, {"brdf", "ggx"}}}},
+                          {"render", {{"width", 512}, {"height", 512}, {"samples_per_frame", 4}, {"max_samples", 1048576}}}};
+  std::vector<std::string> ids;
+  for (int i = 0; i < sessions; ++i) {
+    auto r = cli->Post("/api/sessions", scene.dump(), "application/json");
+    if (!ok(r, 201)) {
+      std::fprintf(stderr, "session %d: %s\n", i, r ? r->body.c_str() : "no reply");
+      return false;
+    }
+    ids.push_back(nlohmann::json::parse(r->body).value("id", ""));
+  }
+  std::vector<int> parts(ids.size(), 0);
+  std::vector<std::thread> streams;
+  const auto t0 = Clock::now();
+  for (size_t i = 0; i < ids.size(); ++i) {
+    streams.emplace_back([&, i] {
+      auto streamCli = server.client(30);
+      std::string carry;
+      streamCli->Get("/api/sessions/" + ids[i] + "/stream", [&](const char* data, size_t len) {
+        carry.append(data, len);
+        for (size_t at; (at = carry.find("\r\n--frame\r\n")) != std::string::npos;) {
+          ++parts[i];
+          carry.erase(0, at + 1);
+        }
+        if (carry.size() > 64) carry.erase(0, carry.size() - 64);
+        return msSince(t0) < seconds * 1000;
+      });
+    });
+  }
+  std::this_thread::sleep_for(std::chrono::duration<double>(seconds * 0.9));
+  out.serverRssMiB = treeRssMiB(server.pid());
+  for (std::thread& t : streams) t.join();
+  const double elapsed = msSince(t0) / 1000.0;
+  std::vector<double> fps;
+  for (int p : parts) fps.push_back(p / elapsed);
+  std::sort(fps.begin(), fps.end());
+  out.minFps = fps.front();
+  out.maxFps = fps.back();
+  out.medianFps = median(fps);
+  return server.terminate() == 0;
+}
+
+}  // namespace
+
+int runHttpBench(const std::string& serverBinary, const std::string& sourceDir) {
+  // The same figures with the device in the supervised render worker (the default) and in the
+  // server's own process (--in-process, as before issue 12), one after the other in one run.
+  ServiceFigures isolated, inProcess;
+  if (!measureService(serverBinary, sourceDir, {}, isolated) ||
+      !measureService(serverBinary, sourceDir, {"--in-process"}, inProcess))
+    return 1;
   header("Service over loopback HTTP (512x512, GGX sphere in the sky, 4 samples/pass)");
-  row("PUT new BRDF -> switch scene -> first frame (median of 5)", median(editMs), "ms", "target <= 200 (issue: 250)");
-  row("parameter change -> next frame (median of 10)", median(sliderMs), "ms", "target <= 60");
-  row("PNG frames received on the stream", fps, "frames/s", "target >= 20");
-  int code = server.terminate();
-  return code == 0 ? 0 : 1;
+  row("PUT new BRDF -> switch scene -> first frame (median of 5)", isolated.editMs, "ms", "target <= 200 (issue: 250)");
+  row("  the same with --in-process", inProcess.editMs, "ms", "ratio " + std::to_string(isolated.editMs / inProcess.editMs).substr(0, 4));
+  row("parameter change -> next frame (median of 10)", isolated.sliderMs, "ms", "target <= 60");
+  row("  the same with --in-process", inProcess.sliderMs, "ms", "ratio " + std::to_string(isolated.sliderMs / inProcess.sliderMs).substr(0, 4));
+  row("PNG frames received on the stream", isolated.fps, "frames/s", "target >= 20");
+  row("  the same with --in-process", inProcess.fps, "frames/s", "ratio " + std::to_string(isolated.fps / inProcess.fps).substr(0, 4));
+
+  // A class: 30 sessions streaming at once (issue 12 measured 1.87 frames/s each, even).
+  ClassFigures cls, clsInProcess;
+  if (!measureClass(serverBinary, sourceDir, {}, 30, 20, cls) ||
+      !measureClass(serverBinary, sourceDir, {"--in-process"}, 30, 20, clsInProcess))
+    return 1;
+  header("A class: 30 sessions streaming the default scene for 20 s");
+  row("frames/s per session: median", cls.medianFps, "frames/s", "--in-process " + std::to_string(clsInProcess.medianFps).substr(0, 4));
+  row("frames/s per session: slowest", cls.minFps, "frames/s", "--in-process " + std::to_string(clsInProcess.minFps).substr(0, 4));
+  row("frames/s per session: fastest", cls.maxFps, "frames/s", "--in-process " + std::to_string(clsInProcess.maxFps).substr(0, 4));
+  row("server and workers, resident memory", cls.serverRssMiB, "MiB", "--in-process " + std::to_string(int(clsInProcess.serverRssMiB)));
+  return 0;
 }
 
 }  // namespace brdfa::bench

@@ -1,37 +1,18 @@
 #include "compile_pool.h"
 
 #include <poll.h>
-#include <signal.h>
-#include <spawn.h>
-#include <sys/socket.h>
-#include <sys/wait.h>
-#include <unistd.h>
 
 #include <cerrno>
 #include <chrono>
-#include <cmath>
 #include <cstdio>
-#include <cstdlib>
-#include <cstring>
-#include <filesystem>
-#include <fstream>
 
 #include "compile_protocol.h"
-
-extern char** environ;
+#include "worker_process.h"
 
 namespace brdfa {
 namespace {
 
 constexpr uint32_t kMaxReplyBytes = 256u << 20;  // far above any SPIR-V a budget allows
-
-// Resident set size of `pid` in MiB, from /proc/<pid>/statm (0 when unreadable).
-double residentMiB(pid_t pid) {
-  std::ifstream statm("/proc/" + std::to_string(pid) + "/statm");
-  unsigned long long size = 0, resident = 0;
-  if (!(statm >> size >> resident)) return 0;
-  return double(resident) * double(sysconf(_SC_PAGESIZE)) / (1024.0 * 1024.0);
-}
 
 std::string secondsText(double s) {
   char text[32];
@@ -104,51 +85,22 @@ void CompilePool::refill() {
 }
 
 std::string CompilePool::findWorker() {
-  namespace fs = std::filesystem;
-  std::error_code ec;
-  if (const char* env = std::getenv("BRDFA_COMPILE_WORKER"); env && fs::is_regular_file(env, ec)) return env;
-  const fs::path self = fs::read_symlink("/proc/self/exe", ec);
-  if (!ec) {
-    const fs::path beside = self.parent_path() / "brdfa-compile-worker";
-    if (fs::is_regular_file(beside, ec)) return beside.string();
-  }
 #ifdef BRDFA_COMPILE_WORKER_PATH
-  if (fs::is_regular_file(BRDFA_COMPILE_WORKER_PATH, ec)) return BRDFA_COMPILE_WORKER_PATH;
+  return worker_process::find("brdfa-compile-worker", "BRDFA_COMPILE_WORKER", BRDFA_COMPILE_WORKER_PATH);
+#else
+  return worker_process::find("brdfa-compile-worker", "BRDFA_COMPILE_WORKER", nullptr);
 #endif
-  return {};
 }
 
 Result<CompilePool::Worker> CompilePool::spawn() {
-  if (workerPath_.empty()) return makeError(ErrorCode::Internal, "no brdfa-compile-worker executable was found");
-  int sv[2];
-  if (::socketpair(AF_UNIX, SOCK_STREAM | SOCK_CLOEXEC, 0, sv) != 0)
-    return makeError(ErrorCode::Internal, std::string("socketpair: ") + std::strerror(errno));
-  posix_spawn_file_actions_t actions;
-  posix_spawn_file_actions_init(&actions);
-  // The worker's end becomes its stdin and stdout (dup2 clears close-on-exec there).
-  posix_spawn_file_actions_adddup2(&actions, sv[1], 0);
-  posix_spawn_file_actions_adddup2(&actions, sv[1], 1);
-  const std::string memory = std::to_string(budget_.memoryMiB);
-  char* argv[] = {const_cast<char*>(workerPath_.c_str()), const_cast<char*>("--memory-mib"),
-                  const_cast<char*>(memory.c_str()), nullptr};
-  pid_t pid = -1;
-  const int rc = ::posix_spawn(&pid, workerPath_.c_str(), &actions, nullptr, argv, environ);
-  posix_spawn_file_actions_destroy(&actions);
-  ::close(sv[1]);
-  if (rc != 0) {
-    ::close(sv[0]);
-    return makeError(ErrorCode::Internal, "cannot start " + workerPath_ + ": " + std::strerror(rc));
-  }
-  return Worker{pid, sv[0]};
+  auto child = worker_process::spawn(workerPath_, {"--memory-mib", std::to_string(budget_.memoryMiB)});
+  if (!child) return child.takeError();
+  return Worker{child->pid, child->fd};
 }
 
 void CompilePool::retire(Worker& w) {
-  if (w.pid > 0) {
-    ::kill(w.pid, SIGKILL);
-    while (::waitpid(w.pid, nullptr, 0) < 0 && errno == EINTR) {
-    }
-  }
-  if (w.fd >= 0) ::close(w.fd);
+  worker_process::Child child{w.pid, w.fd};
+  worker_process::killAndReap(child);
   w = Worker{};
 }
 
@@ -205,20 +157,16 @@ Result<SpirvBinary> CompilePool::exchange(Worker& w, ShaderStage stage, const st
     if (ready < 0 && errno != EINTR) return fail(makeError(ErrorCode::Internal, "poll on the compile worker failed"));
     const double elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     if (elapsed > budget_.seconds) return fail(budgetError(budget_, "still compiling after " + secondsText(budget_.seconds)));
-    if (residentMiB(w.pid) > double(budget_.memoryMiB))
+    if (worker_process::residentBytes(w.pid) > uint64_t(budget_.memoryMiB) << 20)
       return fail(budgetError(budget_, "more than " + std::to_string(budget_.memoryMiB) + " MiB in use"));
   }
   std::string frame;
   if (!compile_protocol::readFrame(w.fd, frame, kMaxReplyBytes)) {
     // The worker died: its own memory limit (setrlimit) or a crash of the compiler.
-    int status = 0;
-    ::kill(w.pid, SIGKILL);
-    while (::waitpid(w.pid, &status, 0) < 0 && errno == EINTR) {
-    }
+    worker_process::Child child{w.pid, -1};  // the socket is closed with the rest below
+    const int status = worker_process::killAndReap(child);
     w.pid = -1;
-    const std::string how = WIFSIGNALED(status) ? "the compiler died with signal " + std::to_string(WTERMSIG(status))
-                                                : "the compiler exited with status " + std::to_string(WEXITSTATUS(status));
-    return fail(budgetError(budget_, how));
+    return fail(budgetError(budget_, "the compiler ended with " + worker_process::describeStatus(status)));
   }
   auto reply = compile_protocol::decodeReply(frame);
   if (!reply) return fail(makeError(ErrorCode::Internal, "the compile worker sent a garbled reply"));

@@ -13,6 +13,8 @@
 #include <thread>
 
 #include "brdf_features.h"
+#include "device_activity.h"
+#include "remote_renderer.h"
 #include "environment_maps.h"
 #include "environment_sampling.h"
 #include "meshes.h"
@@ -38,6 +40,7 @@ void evictOldest(Map& map, std::deque<uint64_t>& order) {
 }  // namespace
 
 Result<std::shared_ptr<Renderer>> Renderer::create(const RendererOptions& options) {
+  if (options.isolate) return createRemoteRenderer(options);
   auto r = RendererImpl::create(options);
   if (!r) return r.takeError();
   return std::shared_ptr<Renderer>(std::move(r.value()));
@@ -329,7 +332,12 @@ Result<std::unique_ptr<ComputeKernel>> RendererImpl::createComputeKernel(const s
   cpi.stage.pName = "main";
   cpi.layout = computeLayout_;
   VkPipeline pipeline;
-  VkResult r = vkCreateComputePipelines(d, VK_NULL_HANDLE, 1, &cpi, nullptr, &pipeline);
+  VkResult r;
+  {
+    // The driver compiles the program here (lavapipe: LLVM), for as long as the program makes it.
+    device_activity::Scope building(device_activity::Kind::PipelineBuild);
+    r = vkCreateComputePipelines(d, VK_NULL_HANDLE, 1, &cpi, nullptr, &pipeline);
+  }
   vkDestroyShaderModule(d, module, nullptr);
   if (r != VK_SUCCESS) return vkError(r, "vkCreateComputePipelines");
   return std::make_unique<ComputeKernel>(d, pipeline);

@@ -11,6 +11,7 @@ const char* errorCodeName(ErrorCode code) {
     case ErrorCode::Unsupported: return "unsupported";
     case ErrorCode::DeviceError: return "device_error";
     case ErrorCode::OverBudget: return "over_budget";
+    case ErrorCode::RenderBudget: return "render_budget";
     case ErrorCode::Internal: return "internal";
   }
   return "internal";

@@ -20,6 +20,9 @@ int httpStatusFor(ErrorCode code) {
       return 503;
     case ErrorCode::OverBudget:
       return 507;
+    // The program itself is what a watchdog stopped: the client's to change.
+    case ErrorCode::RenderBudget:
+      return 422;
     case ErrorCode::Internal:
       return 500;
   }
@@ -40,6 +43,8 @@ const char* errorName(ErrorCode code) {
       return "device_error";
     case ErrorCode::OverBudget:
       return "memory_budget";
+    case ErrorCode::RenderBudget:
+      return "render_budget";
     case ErrorCode::Internal:
       return "internal";
   }

@@ -79,6 +79,10 @@ Result<std::unique_ptr<Service>> Service::create(const ServerConfig& config, std
   // Half the machine's RAM unless told: the rest is for the driver, uploads, caches and the OS.
   const uint64_t ram = uint64_t(sysconf(_SC_PHYS_PAGES)) * uint64_t(sysconf(_SC_PAGESIZE));
   options.maxViewMemoryBytes = config.maxMemoryMiB ? config.maxMemoryMiB << 20 : ram / 2;
+  options.isolate = !config.inProcess;
+  options.buildSeconds = config.buildBudgetSec;
+  options.passSeconds = config.passBudgetSec;
+  options.checkSeconds = config.checkBudgetSec;
   Result<std::shared_ptr<Renderer>> renderer = Renderer::create(options);
   if (!renderer) return renderer.takeError();
   service->renderer = std::move(renderer.value());
@@ -140,6 +144,9 @@ std::string Service::userBrdfDir() const { return (std::filesystem::path(config.
 
 void Service::beginShutdown() {
   stopping = true;
+  // Device work in flight (a pass, a build) is abandoned, not waited for: exit within seconds.
+  // First, as what follows joins threads that may be waiting for the device.
+  if (renderer) renderer->cancel();
   if (jobs) jobs->stop();
   hotLoader.stop();
   renderSlots.shutdown();

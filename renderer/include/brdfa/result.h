@@ -16,6 +16,8 @@ enum class ErrorCode {
   Unsupported,      // valid request the device or build cannot do
   DeviceError,      // Vulkan failed (out of memory, device lost, ...)
   OverBudget,       // the request needs more of a server-wide budget (memory) than is left
+  RenderBudget,     // the program (or scene) took the render worker past its time or memory
+                    // budget and is quarantined (RendererOptions::isolate)
   Internal,         // a bug: an invariant did not hold
 };
 

@@ -1,0 +1,36 @@
+// Helper processes of the renderer (brdfa-compile-worker, brdfa-render-worker): finding their
+// executables, starting them with a socket as stdin and stdout, watching and ending them.
+#pragma once
+
+#include <sys/types.h>
+
+#include <string>
+#include <vector>
+
+#include "brdfa/result.h"
+
+namespace brdfa::worker_process {
+
+struct Child {
+  pid_t pid = -1;
+  int fd = -1;  // our end of the socket that is the child's stdin and stdout
+};
+
+// The executable `name`: $<envVar> when set to a file, else `name` beside the running
+// executable, else `builtPath` (the build tree's). Empty when none exists.
+std::string find(const std::string& name, const char* envVar, const char* builtPath);
+
+// Starts `path` with `args` (argv[1..]) and a fresh socket as its stdin and stdout.
+Result<Child> spawn(const std::string& path, const std::vector<std::string>& args);
+
+// SIGKILLs and reaps the child (when running) and closes the socket; returns its wait status
+// (0 when there was no child). Leaves `child` empty.
+int killAndReap(Child& child);
+
+// "signal 9" or "exit status 1", for a wait status.
+std::string describeStatus(int status);
+
+// Resident set size of `pid` in bytes, from /proc/<pid>/statm (0 when unreadable).
+uint64_t residentBytes(pid_t pid);
+
+}  // namespace brdfa::worker_process

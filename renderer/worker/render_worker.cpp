@@ -1,0 +1,255 @@
+// brdfa-render-worker: owns the Vulkan device for a RemoteRenderer (remote_renderer.h), so a
+// watchdog in the server can stop a pipeline build or a pass by killing this process. Reads
+// request messages on stdin and writes replies on stdout (render_wire.h); each request runs on
+// a thread of its own, as the renderer's API is thread-safe, so a long pass of one view never
+// holds another's request. Exits at end of input (the server went away).
+#include <sys/prctl.h>
+#include <signal.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <cstdio>
+#include <map>
+#include <set>
+#include <memory>
+#include <mutex>
+#include <string>
+#include <thread>
+
+#include "brdfa/renderer.h"
+#include "compile_protocol.h"
+#include "device_activity.h"
+#include "render_wire.h"
+#include "worker_process.h"
+
+namespace brdfa {
+namespace {
+
+using nlohmann::json;
+namespace wire = render_wire;
+
+constexpr uint32_t kMaxRequestBytes = 64u << 20;  // a scene with 64 objects' sources, far below
+
+class Worker {
+ public:
+  Worker(int channel, std::shared_ptr<Renderer> renderer) : channel_(channel), renderer_(std::move(renderer)) {}
+
+  void serve(const RendererOptions& options) {
+    std::thread([this, options] { watch(options); }).detach();
+    for (;;) {
+      std::string frame;
+      if (!compile_protocol::readFrame(channel_, frame, kMaxRequestBytes)) return;
+      auto request = std::make_shared<wire::Message>();
+      if (!wire::decode(frame, *request)) return;
+      std::thread([this, request] { handle(*request); }).detach();
+    }
+  }
+
+ private:
+  void reply(uint64_t id, Result<json> value, std::string tail = {}) {
+    wire::Message m;
+    m.head["id"] = id;
+    m.head["ok"] = value.ok();
+    if (value.ok())
+      m.head["value"] = std::move(value.value());
+    else
+      m.head["error"] = wire::toJson(value.error());
+    m.tail = std::move(tail);
+    const std::string bytes = wire::encode(m);
+    std::lock_guard lock(writeMutex_);
+    // A failed write means the server is gone; the reader sees end of input and exits.
+    compile_protocol::writeFrame(channel_, bytes);
+  }
+
+  std::shared_ptr<RenderView> view(const json& head) {
+    std::lock_guard lock(viewsMutex_);
+    auto it = views_.find(head.at("view").get<uint64_t>());
+    return it == views_.end() ? nullptr : it->second;
+  }
+
+  template <class T, class F>
+  static Result<json> map(Result<T> r, F&& f) {
+    if (!r) return r.takeError();
+    return json(f(r.value()));
+  }
+
+  // Reports the request whose device work overran its budget, once, and then leaves the
+  // killing to the server (which restarts this process and quarantines the program). Says it
+  // is alive every second meanwhile: a worker that falls silent is stopped too.
+  void watch(const RendererOptions& o) {
+    auto lastBeat = std::chrono::steady_clock::now();
+    for (;;) {
+      std::this_thread::sleep_for(std::chrono::milliseconds(50));
+      const auto now = std::chrono::steady_clock::now();
+      if (now - lastBeat >= std::chrono::seconds(1)) {
+        lastBeat = now;
+        const std::string beat = wire::encode(wire::Message{json{{"event", "alive"}}, {}});
+        std::lock_guard lock(writeMutex_);
+        compile_protocol::writeFrame(channel_, beat);
+      }
+      json event;
+      if (auto work = device_activity::oldest()) {
+        const bool build = work->kind == device_activity::Kind::PipelineBuild;
+        const double budget = isCheck(work->tag) ? o.checkSeconds : build ? o.buildSeconds : o.passSeconds;
+        if (std::chrono::duration<double>(now - work->start).count() > budget)
+          event = json{{"id", work->tag}, {"kind", build ? "build" : "pass"}, {"resource", "time"}};
+      }
+      if (event.is_null() && o.workerMemoryBytes > 0 &&
+          worker_process::residentBytes(getpid()) > o.workerMemoryBytes) {
+        // Memory grows in the driver's compiles; else blame the oldest work.
+        auto work = device_activity::oldest(device_activity::Kind::PipelineBuild);
+        if (!work) work = device_activity::oldest();
+        const bool build = work && work->kind == device_activity::Kind::PipelineBuild;
+        event = json{{"id", work ? work->tag : 0}, {"kind", build ? "build" : "pass"}, {"resource", "memory"}};
+      }
+      if (event.is_null()) continue;
+      event["event"] = "overrun";
+      wire::Message m;
+      m.head = std::move(event);
+      const std::string bytes = wire::encode(m);
+      std::lock_guard lock(writeMutex_);
+      compile_protocol::writeFrame(channel_, bytes);
+      return;
+    }
+  }
+
+  bool isCheck(uint64_t tag) {
+    std::lock_guard lock(checksMutex_);
+    return checks_.count(tag) > 0;
+  }
+
+  void handle(const wire::Message& request) {
+    const uint64_t id = request.head.value("id", uint64_t(0));
+    device_activity::setThreadTag(id);
+    // A check's submissions are long by design (millions of evaluations): their own budget.
+    const bool check = request.head.value("op", std::string()).rfind("check", 0) == 0;
+    if (check) {
+      std::lock_guard lock(checksMutex_);
+      checks_.insert(id);
+    }
+    try {
+      handleOp(id, request.head);
+    } catch (const std::exception& e) {
+      reply(id, makeError(ErrorCode::Internal, std::string("render worker: malformed request: ") + e.what()));
+    }
+    if (check) {
+      std::lock_guard lock(checksMutex_);
+      checks_.erase(id);
+    }
+  }
+
+  void handleOp(uint64_t id, const json& head) {
+    const std::string op = head.at("op").get<std::string>();
+    Renderer& r = *renderer_;
+    auto noView = [&] { reply(id, makeError(ErrorCode::Internal, "render worker: no such view")); };
+    if (op == "compileBrdf") {
+      reply(id, map(r.compileBrdf(wire::brdfFromJson(head.at("brdf"))), [](auto& v) { return wire::toJson(v); }));
+    } else if (op == "checkBrdf") {
+      reply(id, map(r.checkBrdf(wire::brdfFromJson(head.at("brdf"))), [](auto& v) { return wire::toJson(v); }));
+    } else if (op == "checkSampler") {
+      reply(id, map(r.checkSampler(wire::brdfFromJson(head.at("brdf"))), [](auto& v) { return wire::toJson(v); }));
+    } else if (op == "checkEnvironmentSampler") {
+      reply(id, map(r.checkEnvironmentSampler(head.at("environment").get<std::string>()),
+                    [](auto& v) { return wire::toJson(v); }));
+    } else if (op == "preload") {
+      reply(id, map(r.preloadFromCache(wire::brdfFromJson(head.at("brdf"))), [](int n) { return n; }));
+    } else if (op == "counters") {
+      reply(id, wire::toJson(r.counters()));
+    } else if (op == "names") {
+      reply(id, json{{"environments", r.environmentNames()}, {"meshes", r.meshNames()}, {"textures", r.textureNames()}});
+    } else if (op == "registerAsset") {
+      Result<void> done = r.registerAsset(head.at("name").get<std::string>(), head.at("kind").get<AssetKind>(),
+                                          head.at("path").get<std::string>());
+      reply(id, done ? Result<json>(json()) : Result<json>(done.takeError()));
+    } else if (op == "createView") {
+      auto created = r.createView();
+      if (!created) return reply(id, created.takeError());
+      std::lock_guard lock(viewsMutex_);
+      views_[head.at("view").get<uint64_t>()] = std::shared_ptr<RenderView>(std::move(created.value()));
+      reply(id, json());
+    } else if (op == "destroyView") {
+      std::shared_ptr<RenderView> gone;
+      {
+        std::lock_guard lock(viewsMutex_);
+        auto it = views_.find(head.at("view").get<uint64_t>());
+        if (it != views_.end()) gone = std::move(it->second), views_.erase(it);
+      }
+      gone.reset();  // outside the lock: freeing device memory may wait for the view's pass
+      reply(id, json());
+    } else if (op == "setScene") {
+      auto v = view(head);
+      if (!v) return noView();
+      Result<void> done = v->setScene(wire::sceneFromJson(head.at("scene")));
+      reply(id, done ? Result<json>(wire::toJson(v->stats())) : Result<json>(done.takeError()));
+    } else if (op == "renderPass") {
+      auto v = view(head);
+      if (!v) return noView();
+      reply(id, map(v->renderPass(), [](auto& s) { return wire::toJson(s); }));
+    } else if (op == "stats") {
+      auto v = view(head);
+      if (!v) return noView();
+      reply(id, wire::toJson(v->stats()));
+    } else if (op == "readFrame") {
+      auto v = view(head);
+      if (!v) return noView();
+      Result<Frame> frame = v->readFrame(head.at("linear").get<bool>());
+      if (!frame) return reply(id, frame.takeError());
+      Frame& f = frame.value();
+      // Pixels travel in the binary tail: 8-bit first, then the float ones when asked.
+      std::string tail(reinterpret_cast<const char*>(f.rgba8.data()), f.rgba8.size());
+      tail.append(reinterpret_cast<const char*>(f.rgba32f.data()), f.rgba32f.size() * sizeof(float));
+      reply(id, json{{"width", f.width}, {"height", f.height}, {"linear", !f.rgba32f.empty()}, {"stats", wire::toJson(f.stats)}},
+            std::move(tail));
+    } else {
+      reply(id, makeError(ErrorCode::Internal, "render worker: unknown operation " + op));
+    }
+  }
+
+  const int channel_;
+  std::shared_ptr<Renderer> renderer_;
+  std::mutex writeMutex_;
+  std::mutex viewsMutex_;
+  std::map<uint64_t, std::shared_ptr<RenderView>> views_;
+  std::mutex checksMutex_;
+  std::set<uint64_t> checks_;  // requests that are checks
+};
+
+}  // namespace
+}  // namespace brdfa
+
+int main() {
+  using namespace brdfa;
+  // A server killed without a chance to close the channel still takes its worker along.
+  prctl(PR_SET_PDEATHSIG, SIGKILL);
+  // The protocol owns the channel; anything a library prints goes to stderr instead.
+  const int channel = dup(0);
+  dup2(2, 1);
+  std::string frame;
+  render_wire::Message start;
+  if (!compile_protocol::readFrame(channel, frame, kMaxRequestBytes) || !render_wire::decode(frame, start)) return 1;
+  render_wire::Message hello;
+  hello.head["id"] = 0;
+  std::shared_ptr<Renderer> renderer;
+  RendererOptions options;
+  try {
+    options = render_wire::optionsFromJson(start.head.at("options"));
+    options.isolate = false;  // this process is the isolation
+    Result<std::shared_ptr<Renderer>> created = Renderer::create(options);
+    if (created) {
+      renderer = created.value();
+      hello.head["ok"] = true;
+      hello.head["value"] = render_wire::toJson(renderer->device());
+    } else {
+      hello.head["ok"] = false;
+      hello.head["error"] = render_wire::toJson(created.error());
+    }
+  } catch (const std::exception& e) {
+    hello.head["ok"] = false;
+    hello.head["error"] = render_wire::toJson(makeError(ErrorCode::Internal, std::string("render worker: ") + e.what()));
+  }
+  if (!compile_protocol::writeFrame(channel, render_wire::encode(hello)) || !renderer) return 1;
+  Worker(channel, renderer).serve(options);
+  // Detached request threads may still run: leave without destructors (the kernel frees all).
+  std::fflush(stderr);
+  _exit(0);
+}

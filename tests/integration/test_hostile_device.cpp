@@ -1,0 +1,235 @@
+// Issue 12, "the device contained": programs that hold the device (a huge private array whose
+// driver compile runs for minutes, loops too long for one submission) are stopped by the render
+// worker's watchdog and quarantined, while another session streams on.
+#include <algorithm>
+#include <atomic>
+#include <functional>
+#include <mutex>
+#include <thread>
+
+#include "server_fixture.h"
+
+namespace brdfa::itest {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+using nlohmann::json;
+
+// Reads a session's stream on a thread of its own and keeps when each part arrived.
+class StreamWatch {
+ public:
+  StreamWatch(ServerProcess& server, const std::string& session) {
+    thread_ = std::thread([this, &server, session] {
+      auto cli = server.client(120);
+      std::string tail;
+      cli->Get("/api/sessions/" + session + "/stream", httplib::Headers{}, [&](const char* data, size_t len) {
+        tail.append(data, len);
+        static const std::string kBoundary = "--frame\r\n";
+        for (size_t at; (at = tail.find(kBoundary)) != std::string::npos;) {
+          tail.erase(0, at + kBoundary.size());
+          std::lock_guard lock(mutex_);
+          arrivals_.push_back(Clock::now());
+        }
+        if (tail.size() > kBoundary.size()) tail.erase(0, tail.size() - kBoundary.size());
+        return !stop_.load();
+      });
+    });
+  }
+  ~StreamWatch() {
+    stop_ = true;
+    thread_.join();
+  }
+  size_t parts() {
+    std::lock_guard lock(mutex_);
+    return arrivals_.size();
+  }
+  // The longest time without a part in [from, to] (the edges count as parts).
+  double longestGapSeconds(Clock::time_point from, Clock::time_point to) {
+    std::lock_guard lock(mutex_);
+    Clock::time_point last = from;
+    double longest = 0;
+    for (Clock::time_point t : arrivals_) {
+      if (t < from) continue;
+      if (t > to) break;
+      longest = std::max(longest, std::chrono::duration<double>(t - last).count());
+      last = t;
+    }
+    return std::max(longest, std::chrono::duration<double>(to - last).count());
+  }
+  // Seconds from `after` to the first part after it (-1: none yet).
+  double firstPartAfter(Clock::time_point after) {
+    std::lock_guard lock(mutex_);
+    for (Clock::time_point t : arrivals_)
+      if (t > after) return std::chrono::duration<double>(t - after).count();
+    return -1;
+  }
+
+ private:
+  std::thread thread_;
+  std::atomic<bool> stop_{false};
+  std::mutex mutex_;
+  std::vector<Clock::time_point> arrivals_;
+};
+
+class HostileDevice : public ServerTest {
+ protected:
+  static void SetUpTestSuite() {
+    server_ = std::make_unique<ServerProcess>();
+    // A memory budget a 4096^2 session passes (~2 GiB of targets) while small ones fit.
+    startError_ = server_->start({"--idle-timeout", "60", "--max-memory", "512", "--compile-timeout", "2"});
+    if (!startError_.empty()) ADD_FAILURE() << "server did not start: " << startError_;
+  }
+
+  // A session streaming a scene that never converges: small, so its passes stay short.
+  static std::string streamingSession() {
+    json scene = furnaceScene("lambert", json::object(), 64, 1 << 20, 1);
+    auto r = post("/api/sessions", scene.dump());
+    if (!r || r->status != 201) return {};
+    return bodyJson(r).value("id", "");
+  }
+
+  static json health() {
+    auto r = get("/api/health");
+    return r && r->status == 200 ? bodyJson(r) : json();
+  }
+};
+
+// One attack and what it got: the status of its last reply and that reply's JSON.
+struct Outcome {
+  int status = 0;
+  json body;
+};
+
+// Creates a session with the library BRDF `name` and asks for its first frame.
+Outcome sessionFrame(ServerProcess& server, const std::string& name, int size) {
+  auto cli = server.client(30);
+  auto r = cli->Post("/api/sessions", furnaceScene(name, json::object(), size, 64, 4).dump(), "application/json");
+  if (!r) return {};
+  if (r->status != 201) return {r->status, bodyJson(r)};
+  const std::string id = bodyJson(r).value("id", "");
+  auto frame = cli->Get("/api/sessions/" + id + "/frame?min_spp=1");
+  Outcome out{frame ? frame->status : 0, frame && frame->status != 200 ? bodyJson(frame) : json::object()};
+  cli->Delete("/api/sessions/" + id);
+  return out;
+}
+
+TEST_F(HostileDevice, EachAttackGetsItsStatusWhileAnotherSessionStreams) {
+  const std::string streamer = streamingSession();
+  ASSERT_FALSE(streamer.empty());
+  StreamWatch watch(*server_, streamer);
+  const auto warmDeadline = Clock::now() + std::chrono::seconds(30);
+  while (watch.parts() < 5 && Clock::now() < warmDeadline) std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  ASSERT_GE(watch.parts(), 5u) << "the streaming session never got going";
+  const uint64_t restartsBefore = health()["render_worker"].value("restarts", uint64_t(0));
+
+  for (const char* file : {"huge_private_array", "infinite_loop", "billion_loop"}) {
+    const std::string text = readRepoFile(std::string("tests/hostile/") + file + ".brdf");
+    ASSERT_FALSE(text.empty()) << file;
+    auto r = put(std::string("/api/brdfs/hostile_") + file, text, "text/plain");
+    ASSERT_TRUE(r && r->status == 201) << file << ": " << (r ? r->body : "no reply");
+  }
+  const std::string lambert = readRepoFile("shaders/brdfs/lambert.brdf");
+  struct Attack {
+    const char* name;
+    std::function<Outcome()> run;
+    std::vector<int> statuses;  // documented answers
+    const char* error;          // the error name a failure must carry ("" when any)
+  };
+  std::vector<Attack> attacks{
+      // The driver's compile of a million-float array never ends: past the pass budget.
+      {"huge private array", [&] { return sessionFrame(*server_, "hostile_huge_array_alias", 256); }, {422}, "render_budget"},
+      // llvmpipe caps each loop at 65535 rounds, so these render (slowly, in short
+      // submissions); a driver without the cap stops at the pass budget.
+      {"infinite loop", [&] { return sessionFrame(*server_, "hostile_infinite_loop", 256); }, {200, 422}, "render_budget"},
+      {"billion-round loop", [&] { return sessionFrame(*server_, "hostile_billion_loop", 256); }, {200, 422}, "render_budget"},
+      {"macro bomb",
+       [&] {
+         auto r = server_->client(30)->Post("/api/brdfs/validate", readRepoFile("tests/hostile/macro_bomb.brdf"), "text/plain");
+         return r ? Outcome{r->status, bodyJson(r)} : Outcome{};
+       },
+       {422},
+       "compile_error"},
+      {"1 MiB source",
+       [&] {
+         std::string big = lambert + "\n";
+         while (big.size() <= (1u << 20)) big += "// padding to pass the 1 MiB limit on .brdf text\n";
+         auto r = server_->client(30)->Put("/api/brdfs/hostile_big", big, "text/plain");
+         return r ? Outcome{r->status, bodyJson(r)} : Outcome{};
+       },
+       {413},
+       "payload_too_large"},
+      {"4096x4096 session past the memory budget",
+       [&] {
+         auto r = server_->client(30)->Post("/api/sessions", furnaceScene("lambert", json::object(), 4096, 4, 4).dump(),
+                                            "application/json");
+         return r ? Outcome{r->status, bodyJson(r)} : Outcome{};
+       },
+       {507},
+       "memory_budget"},
+      // Quarantined above: refused at once, without reaching the device.
+      {"the quarantined program again", [&] { return sessionFrame(*server_, "hostile_huge_array_alias", 64); }, {422}, "render_budget"},
+  };
+  // The array under a name of its own, so the quarantine message can be checked to name it.
+  ASSERT_TRUE(put("/api/brdfs/hostile_huge_array_alias", readRepoFile("tests/hostile/huge_private_array.brdf"), "text/plain"));
+
+  for (const Attack& attack : attacks) {
+    const auto start = Clock::now();
+    Outcome out = attack.run();
+    if (!out.body.is_object()) out.body = json::object();
+    const auto end = Clock::now();
+    const double seconds = std::chrono::duration<double>(end - start).count();
+    EXPECT_LT(seconds, 15.0) << attack.name;
+    EXPECT_NE(std::find(attack.statuses.begin(), attack.statuses.end(), out.status), attack.statuses.end())
+        << attack.name << ": " << out.status << " " << out.body.dump();
+    if (out.status >= 400) {
+      EXPECT_EQ(out.body.value("error", ""), attack.error) << attack.name << ": " << out.body.dump();
+    }
+    if (out.body.value("error", "") == "render_budget") {
+      const std::string message = out.body.value("message", "");
+      EXPECT_NE(message.find("hostile_huge_array_alias"), std::string::npos) << attack.name << ": " << message;
+      EXPECT_NE(message.find("budget of 1.5 s"), std::string::npos) << attack.name << ": " << message;
+    }
+    // The server is healthy, and the streaming session's frames kept coming.
+    const json h = health();
+    EXPECT_EQ(h.value("status", ""), "ok") << attack.name;
+    std::this_thread::sleep_for(std::chrono::milliseconds(2500));
+    const double gap = watch.longestGapSeconds(start, end);
+    const double next = watch.firstPartAfter(end);
+    EXPECT_LT(gap, 2.0) << attack.name << ": the streaming session stalled";
+    EXPECT_GE(next, 0.0) << attack.name << ": no frame after the attack";
+    EXPECT_LT(next, 2.5) << attack.name;
+    std::printf("%-42s %d in %5.2f s; streaming session's longest gap %.2f s, next frame after %.2f s\n", attack.name,
+                out.status, seconds, gap, next);
+  }
+  const json h = health();
+  EXPECT_GT(h["render_worker"].value("restarts", uint64_t(0)), restartsBefore) << "the array never stopped the worker";
+  EXPECT_GE(h["render_worker"].value("quarantined_programs", uint64_t(0)), 1u);
+
+  del("/api/sessions/" + streamer);
+  for (const char* name : {"hostile_huge_private_array", "hostile_infinite_loop", "hostile_billion_loop", "hostile_huge_array_alias"})
+    del(std::string("/api/brdfs/") + name);
+}
+
+// SIGTERM while the worker is stuck in the array's compile: the server exits cleanly within 5 s.
+// (A long pass budget keeps the worker stuck.)
+TEST(HostileShutdown, SigtermWhileTheDeviceIsHeldExitsWithinFiveSeconds) {
+  ServerProcess server;
+  ASSERT_EQ(server.start({"--pass-budget", "60"}), "");
+  auto cli = server.client(60);
+  auto r = cli->Put("/api/brdfs/held", readRepoFile("tests/hostile/huge_private_array.brdf"), "text/plain");
+  ASSERT_TRUE(r && r->status == 201);
+  r = cli->Put("/api/sessions/default/scene", furnaceScene("held", json::object(), 64, 4, 4).dump(), "application/json");
+  ASSERT_TRUE(r && r->status == 200) << (r ? r->body : "");
+  std::thread waiter([&] { server.client(60)->Get("/api/sessions/default/frame?min_spp=1"); });
+  std::this_thread::sleep_for(std::chrono::seconds(2));  // the driver's compile is under way
+  const auto t0 = Clock::now();
+  const int code = server.terminate(std::chrono::seconds(20));
+  const double seconds = std::chrono::duration<double>(Clock::now() - t0).count();
+  waiter.join();
+  EXPECT_EQ(code, 0) << server.logTail();
+  EXPECT_LT(seconds, 5.0);
+  std::printf("SIGTERM with the device held: exited in %.2f s\n", seconds);
+}
+
+}  // namespace
+}  // namespace brdfa::itest
