@@ -70,16 +70,21 @@ struct Call {
   uint64_t view = 0;
 };
 
-// Waits up to `seconds` for one message on `fd`.
+// Waits up to `seconds` for one reply on `fd`, passing over events (a spare worker's heartbeats
+// wait in its socket).
 Result<wire::Message> receive(int fd, double seconds) {
-  pollfd p{fd, POLLIN, 0};
-  if (::poll(&p, 1, static_cast<int>(seconds * 1000)) <= 0)
-    return makeError(ErrorCode::DeviceError, "the render worker did not answer within " + secondsText(seconds));
-  std::string frame;
-  wire::Message m;
-  if (!compile_protocol::readFrame(fd, frame, kMaxReplyBytes) || !wire::decode(frame, m))
-    return makeError(ErrorCode::DeviceError, "the render worker closed its channel");
-  return m;
+  const auto deadline = Clock::now() + std::chrono::duration<double>(seconds);
+  for (;;) {
+    pollfd p{fd, POLLIN, 0};
+    const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(deadline - Clock::now()).count();
+    if (left <= 0 || ::poll(&p, 1, static_cast<int>(left)) <= 0)
+      return makeError(ErrorCode::DeviceError, "the render worker did not answer within " + secondsText(seconds));
+    std::string frame;
+    wire::Message m;
+    if (!compile_protocol::readFrame(fd, frame, kMaxReplyBytes) || !wire::decode(frame, m))
+      return makeError(ErrorCode::DeviceError, "the render worker closed its channel");
+    if (!m.head.contains("event")) return m;
+  }
 }
 
 // One request and its reply on a channel nobody else reads yet (a worker being started).
@@ -126,6 +131,7 @@ class RemoteRenderer : public Renderer, public std::enable_shared_from_this<Remo
   explicit RemoteRenderer(const RendererOptions& options) : options_(options) {
     if (options_.workerMemoryBytes == 0 && options_.maxViewMemoryBytes > 0)
       options_.workerMemoryBytes = options_.maxViewMemoryBytes + (uint64_t(2) << 30);
+    if (!worker_process::kMemoryBudgetsApply) options_.workerMemoryBytes = 0;
 #ifdef BRDFA_RENDER_WORKER_PATH
     workerPath_ = worker_process::find("brdfa-render-worker", "BRDFA_RENDER_WORKER", BRDFA_RENDER_WORKER_PATH);
 #else
@@ -285,14 +291,6 @@ class RemoteRenderer : public Renderer, public std::enable_shared_from_this<Remo
       return std::move(p->reply);
     }
     return makeError(ErrorCode::DeviceError, "the render worker was replaced three times during this request");
-  }
-
-  // Sends and forgets (a view's release): nothing to do when the worker is gone.
-  void post(json head, uint64_t generation) {
-    std::lock_guard lock(mutex_);
-    if (!alive_ || generation != generation_) return;
-    head["id"] = nextId_++;  // no pending entry: the reply is dropped
-    compile_protocol::writeFrame(worker_.fd, wire::encode(wire::Message{std::move(head), {}}));
   }
 
  private:
@@ -607,7 +605,13 @@ class RemoteRenderer : public Renderer, public std::enable_shared_from_this<Remo
 
 RemoteView::~RemoteView() {
   std::lock_guard lock(mutex_);
-  if (generation_) r_->post(json{{"op", "destroyView"}, {"view", id_}}, generation_);
+  // Waited for: the view's memory is back in the budget when its owner goes on (a session
+  // deleted, a refused one-shot). Nothing to do when the worker it lived in is gone.
+  if (generation_ && generation_ == r_->generation()) {
+    Call c;
+    c.head = json{{"op", "destroyView"}, {"view", id_}};
+    (void)r_->request(std::move(c));
+  }
 }
 
 Result<void> RemoteView::ensureRemote() {

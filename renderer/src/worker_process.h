@@ -9,7 +9,23 @@
 
 #include "brdfa/result.h"
 
+#if defined(__SANITIZE_ADDRESS__)
+#define BRDFA_UNDER_ASAN 1
+#elif defined(__has_feature)
+#if __has_feature(address_sanitizer)
+#define BRDFA_UNDER_ASAN 1
+#endif
+#endif
+
 namespace brdfa::worker_process {
+
+// AddressSanitizer's shadow memory makes resident sizes (and address-space caps) meaningless:
+// memory budgets of worker processes are not applied in such a build.
+#ifdef BRDFA_UNDER_ASAN
+inline constexpr bool kMemoryBudgetsApply = false;
+#else
+inline constexpr bool kMemoryBudgetsApply = true;
+#endif
 
 struct Child {
   pid_t pid = -1;

@@ -9,21 +9,15 @@
 #include <string>
 
 #include "compile_protocol.h"
+#include "worker_process.h"
 #include "glsl_compiler.h"
 
-#if defined(__SANITIZE_ADDRESS__)
-#define BRDFA_WORKER_UNDER_ASAN 1
-#elif defined(__has_feature)
-#if __has_feature(address_sanitizer)
-#define BRDFA_WORKER_UNDER_ASAN 1
-#endif
-#endif
 
 int main(int argc, char** argv) {
   unsigned long long memoryMiB = 0;
   for (int i = 1; i + 1 < argc; ++i)
     if (std::strcmp(argv[i], "--memory-mib") == 0) memoryMiB = std::strtoull(argv[i + 1], nullptr, 10);
-#if !defined(BRDFA_WORKER_UNDER_ASAN)
+#if !defined(BRDFA_UNDER_ASAN)
   // The hard cap: allocation fails past it (glslang then throws or the process dies), whatever
   // the pool's RSS watch sees. Address space, not RSS, so it is larger than the budget by what
   // the process maps without using (libraries, stacks). Under AddressSanitizer the shadow
