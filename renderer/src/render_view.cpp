@@ -372,7 +372,10 @@ Result<void> RenderViewImpl::setScene(const Scene& scene) {
   if (geometryChanged || lightingChanged) clearPending_ = true;
   // What a submission costs is relearned when what the shading runs changed (a parameter can
   // be a loop count); a camera move keeps it.
-  if (!sameShading) msPerUnit_ = maxUnits_ = 0;
+  if (!sameShading) {
+    msPerUnit_ = maxUnits_ = 0;
+    warmUp_ = true;
+  }
   if (restart) {
     const uint64_t version = stats_.sceneVersion;
     stats_ = FrameStats{};
@@ -768,7 +771,14 @@ Result<FrameStats> RenderViewImpl::renderPass() {
     // (the bottom of a sphere, before the next pass starts at its top) its covered pixels are
     // few and the measure is noisy, and a low reading would make the next submission too long.
     passDone += units;
-    if (units > 0 && (msPerUnit_ <= 0 || units >= 0.5 * sized || ms > targetMs))
+    // The first submission of a shading can carry the driver's compile of its pipeline
+    // (lavapipe JITs at the first dispatch, ~0.5 s): it is a warm-up, and a second probe
+    // measures. Learned from it, the cost read ~1000x too high, and the view went on in
+    // one-workgroup submissions, each waiting its turn behind every other view's (one of 30
+    // sessions streaming stalled for a minute).
+    if (units > 0 && warmUp_)
+      warmUp_ = false;
+    else if (units > 0 && (msPerUnit_ <= 0 || units >= 0.5 * sized || ms > targetMs))
       msPerUnit_ = std::max(ms / units, kCostDecay * msPerUnit_);
     maxUnits_ = std::max(maxUnits_, units);
   } while (done < count);

@@ -93,6 +93,7 @@ class RenderViewImpl final : public RenderView {
   // submission measured so far in those units (growth is bounded by a multiple of it).
   double msPerUnit_ = 0;
   double maxUnits_ = 0;
+  bool warmUp_ = true;  // the next shading submission is a warm-up (see renderPass)
   bool coverageKnown_ = false;  // ObjectState::cover is measured for the current geometry
   double sinceErrorMs_ = 0;  // pass time since rel_error was last refreshed
   FrameStats stats_;

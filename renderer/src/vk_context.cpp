@@ -190,8 +190,13 @@ Result<void> VkContext::submitAndWait(VkCommandBuffer commands, VkFence fence, d
   // In flight from its place in the queue's order until its fence signals (device_activity.h).
   std::optional<device_activity::Scope> inFlight;
   std::unique_lock<std::mutex> lock(queueMutex_);
-  const uint64_t ticket = nextTicket_++;
-  queueTurn_.wait(lock, [&] { return serving_ == ticket; });
+  if (queueBusy_ || !queueWaiters_.empty()) {
+    std::condition_variable turn;
+    queueWaiters_.push_back(&turn);
+    turn.wait(lock, [&] { return !queueBusy_ && queueWaiters_.front() == &turn; });
+    queueWaiters_.pop_front();
+  }
+  queueBusy_ = true;
   inFlight.emplace(device_activity::Kind::Submission);
   lock.unlock();
   const auto start = std::chrono::steady_clock::now();
@@ -203,9 +208,9 @@ Result<void> VkContext::submitAndWait(VkCommandBuffer commands, VkFence fence, d
   }
   if (busyMs) *busyMs = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
   lock.lock();
-  ++serving_;
+  queueBusy_ = false;
+  if (!queueWaiters_.empty()) queueWaiters_.front()->notify_one();
   lock.unlock();
-  queueTurn_.notify_all();
   if (r != VK_SUCCESS) return vkError(r, what);
   return {};
 }
