@@ -73,4 +73,12 @@ extern const char* const kNanOnHalfHemisphere;
 nlohmann::json furnaceScene(const std::string& brdf, const nlohmann::json& params, int size, int maxSamples,
                             int samplesPerFrame = 8);
 
+// Raw sockets, for clients httplib's cannot be (trickling a request, hanging up mid-render).
+// A blocking TCP connection to the server on loopback, from `source` (another loopback address
+// is another client address); -1 on failure.
+int connectTo(int port, const char* source = "127.0.0.1");
+bool sendAll(int fd, const std::string& bytes);
+// True once the server closed (or reset) the connection; reads and drops what it sent first.
+bool closedByServer(int fd);
+
 }  // namespace brdfa::itest

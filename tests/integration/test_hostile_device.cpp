@@ -1,6 +1,9 @@
 // Issue 12, "the device contained": programs that hold the device (a huge private array whose
 // driver compile runs for minutes, loops too long for one submission) are stopped by the render
 // worker's watchdog and quarantined, while another session streams on.
+#include <sys/socket.h>
+#include <unistd.h>
+
 #include <algorithm>
 #include <atomic>
 #include <functional>
@@ -76,7 +79,9 @@ class HostileDevice : public ServerTest {
   static void SetUpTestSuite() {
     server_ = std::make_unique<ServerProcess>();
     // A memory budget a 4096^2 session passes (~2 GiB of targets) while small ones fit.
-    startError_ = server_->start({"--idle-timeout", "60", "--max-memory", "512", "--compile-timeout", "2"});
+    // Slow clients: 64 connections per address of 96 workers, cut after 3 s.
+    startError_ = server_->start({"--idle-timeout", "60", "--max-memory", "512", "--compile-timeout", "2", "--threads",
+                                  "96", "--max-connections-per-address", "64", "--request-read-timeout", "3"});
     if (!startError_.empty()) ADD_FAILURE() << "server did not start: " << startError_;
   }
 
@@ -111,6 +116,58 @@ Outcome sessionFrame(ServerProcess& server, const std::string& name, int size) {
   Outcome out{frame ? frame->status : 0, frame && frame->status != 200 ? bodyJson(frame) : json::object()};
   cli->Delete("/api/sessions/" + id);
   return out;
+}
+
+// Opens `count` connections from another client address that send a request a byte a second. 200 when every one of them was
+// refused or cut within 10 s and a health request sent meanwhile was answered within 2 s;
+// else 0, with the figures.
+Outcome slowLoris(ServerProcess& server, int count) {
+  const std::string request = "GET /api/health HTTP/1.1\r\nHost: 127.0.0.1\r\n\r\n";
+  std::vector<int> fds;
+  for (int i = 0; i < count; ++i)
+    if (int fd = connectTo(server.port(), "127.0.0.2"); fd >= 0) fds.push_back(fd);  // another client
+  int healthStatus = 0;
+  double healthSeconds = -1;
+  std::thread health([&] {
+    std::this_thread::sleep_for(std::chrono::seconds(1));
+    const auto t = Clock::now();
+    auto r = server.client(10)->Get("/api/health");
+    healthStatus = r ? r->status : 0;
+    healthSeconds = std::chrono::duration<double>(Clock::now() - t).count();
+  });
+  std::vector<bool> closed(fds.size(), false);
+  size_t open = fds.size();
+  const auto start = Clock::now();
+  for (size_t sent = 0; open > 0 && Clock::now() - start < std::chrono::seconds(10); ++sent) {
+    for (size_t i = 0; i < fds.size(); ++i) {
+      if (closed[i]) continue;
+      if (closedByServer(fds[i]) || !sendAll(fds[i], request.substr(sent % request.size(), 1))) closed[i] = true, --open;
+    }
+    std::this_thread::sleep_for(std::chrono::seconds(1));
+  }
+  health.join();
+  for (int fd : fds) ::close(fd);
+  const json figures{{"connections", fds.size()}, {"still_open", open}, {"health_status", healthStatus},
+                     {"health_seconds", healthSeconds}};
+  const bool held = fds.size() == size_t(count) && open == 0 && healthStatus == 200 && healthSeconds < 2.0;
+  return {held ? 200 : 0, figures};
+}
+
+// Two one-shots that would run for minutes, whose clients hang up after 0.5 s; then a small
+// one-shot, whose status is the outcome (503 if the abandoned ones kept the slots).
+Outcome abandonedOneShots(ServerProcess& server) {
+  const json huge = {{"scene", furnaceScene("lambert", json::object(), 256, 65536, 4)}, {"spp", 65536}, {"format", "pfm"}};
+  const std::string body = huge.dump();
+  const std::string request = "POST /api/render HTTP/1.1\r\nHost: 127.0.0.1\r\nContent-Type: application/json\r\n"
+                              "Content-Length: " + std::to_string(body.size()) + "\r\n\r\n" + body;
+  int a = connectTo(server.port()), b = connectTo(server.port());
+  if (a < 0 || b < 0 || !sendAll(a, request) || !sendAll(b, request)) return {};
+  std::this_thread::sleep_for(std::chrono::milliseconds(500));
+  ::close(a);
+  ::close(b);
+  const json small = {{"scene", furnaceScene("lambert", json::object(), 32, 4, 4)}, {"spp", 4}, {"format", "pfm"}};
+  auto third = server.client(20)->Post("/api/render", small.dump(), "application/json");
+  return {third ? third->status : 0, third && third->status != 200 ? bodyJson(third) : json::object()};
 }
 
 TEST_F(HostileDevice, EachAttackGetsItsStatusWhileAnotherSessionStreams) {
@@ -166,6 +223,12 @@ TEST_F(HostileDevice, EachAttackGetsItsStatusWhileAnotherSessionStreams) {
        },
        {507},
        "memory_budget"},
+      // 70 clients trickling a request a byte a second: past the per-address cap (64 here) they
+      // are refused at once, the others are cut at the read deadline (3 s here), and a health
+      // request meanwhile is answered by a worker they could not take. 200: all that held.
+      {"70 slow-loris connections", [&] { return slowLoris(*server_, 70); }, {200}, ""},
+      // Two one-shots of 65536 samples whose clients hang up: a third gets a slot at once.
+      {"two abandoned one-shot renders", [&] { return abandonedOneShots(*server_); }, {200}, ""},
       // Quarantined above: refused at once, without reaching the device.
       {"the quarantined program again", [&] { return sessionFrame(*server_, "hostile_huge_array_alias", 64); }, {422}, "render_budget"},
   };
