@@ -173,25 +173,31 @@ bool measureClass(const std::string& serverBinary, const std::string& sourceDir,
 int runHttpBench(const std::string& serverBinary, const std::string& sourceDir) {
   // The same figures with the device in the supervised render worker (the default) and in the
   // server's own process (--in-process, as before issue 12), one after the other in one run.
-  ServiceFigures isolated, inProcess;
+  // $BRDFA_BENCH_BASELINE_SERVER: another build's brdfa-server measured the same way in this run
+  // (with no extra flags), for ratios against an earlier version.
+  const char* baseline = std::getenv("BRDFA_BENCH_BASELINE_SERVER");
+  ServiceFigures isolated, inProcess, before;
   if (!measureService(serverBinary, sourceDir, {}, isolated) ||
-      !measureService(serverBinary, sourceDir, {"--in-process"}, inProcess))
+      !measureService(serverBinary, sourceDir, {"--in-process"}, inProcess) ||
+      (baseline && !measureService(baseline, sourceDir, {}, before)))
     return 1;
+  auto ratio = [](double a, double b) { return "ratio " + std::to_string(a / b).substr(0, 4); };
   header("Service over loopback HTTP (512x512, GGX sphere in the sky, 4 samples/pass)");
   row("PUT new BRDF -> switch scene -> first frame (median of 5)", isolated.editMs, "ms", "target <= 200 (issue: 250)");
-  row("  the same with --in-process", inProcess.editMs, "ms", "ratio " + std::to_string(isolated.editMs / inProcess.editMs).substr(0, 4));
+  row("  the same with --in-process", inProcess.editMs, "ms", ratio(isolated.editMs, inProcess.editMs));
+  if (baseline) row("  the same with the baseline build", before.editMs, "ms", ratio(isolated.editMs, before.editMs));
   row("parameter change -> next frame (median of 10)", isolated.sliderMs, "ms", "target <= 60");
-  row("  the same with --in-process", inProcess.sliderMs, "ms", "ratio " + std::to_string(isolated.sliderMs / inProcess.sliderMs).substr(0, 4));
+  row("  the same with --in-process", inProcess.sliderMs, "ms", ratio(isolated.sliderMs, inProcess.sliderMs));
+  if (baseline) row("  the same with the baseline build", before.sliderMs, "ms", ratio(isolated.sliderMs, before.sliderMs));
   row("PNG frames received on the stream", isolated.fps, "frames/s", "target >= 20");
-  row("  the same with --in-process", inProcess.fps, "frames/s", "ratio " + std::to_string(isolated.fps / inProcess.fps).substr(0, 4));
+  row("  the same with --in-process", inProcess.fps, "frames/s", ratio(isolated.fps, inProcess.fps));
+  if (baseline) row("  the same with the baseline build", before.fps, "frames/s", ratio(isolated.fps, before.fps));
 
   // A class: 30 sessions streaming at once (issue 12 measured 1.87 frames/s each, even), one
-  // address (the cap on connections per address raised for it). $BRDFA_BENCH_BASELINE_SERVER:
-  // another build's brdfa-server measured the same way in this run (with no extra flags).
+  // address (the cap on connections per address raised for it).
   const std::vector<std::string> classArgs{"--max-connections-per-address", "256"};
   std::vector<std::pair<std::string, ClassFigures>> runs;
   for (int mode = 0; mode < 3; ++mode) {
-    const char* baseline = std::getenv("BRDFA_BENCH_BASELINE_SERVER");
     if (mode == 2 && !baseline) break;
     std::vector<std::string> args = mode == 2 ? std::vector<std::string>{} : classArgs;
     if (mode == 1) args.push_back("--in-process");

@@ -40,7 +40,8 @@ export function mountViewer(el) {
   });
 
   on('stats', ({ stats }) => {
-    if (!stats) return;
+    // A stats reply that was in flight when the tab was hidden must not cover 'paused'.
+    if (!stats || !state.visible) return;
     // converged: rel_error reached render.target_error; max spp: render.max_samples reached.
     const end = stats.converged ? ' · converged' : stats.max_samples_reached ? ' · max spp' : '';
     const target = stats.target_error != null ? ` (target ${errPct(stats.target_error)})` : '';
