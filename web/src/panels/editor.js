@@ -244,11 +244,14 @@ export function mountEditor(el, libEl) {
     const e = state.editing;
     if (!e?.name || e.builtin || !confirm(`Delete "${e.name}" and its presets? Objects using it keep rendering a scratch copy.`)) return;
     try {
-      const users = state.scene.objects.some((o) => o.brdf === e.name);
+      // The server's scene, not only this page's copy: the reply to a switch to this BRDF made
+      // just before may not have arrived yet, while the server already renders it.
+      const scene = (await api.getScene(state.session).catch(() => null)) || state.scene;
+      const users = [scene, state.scene].some((sc) => sc.objects.some((o) => o.brdf === e.name));
       if (users) {   // a scene cannot name a deleted BRDF: move its objects to this tab's scratch copy
         const scratch = scratchName(state.session);
         await api.putBrdf(scratch, e.source);
-        const objects = state.scene.objects.map((o) => (o.brdf === e.name ? { ...o, brdf: scratch } : o));
+        const objects = scene.objects.map((o) => (o.brdf === e.name ? { ...o, brdf: scratch } : o));
         set({ scene: await api.patchScene(state.session, { objects }) });
         if (state.brdf?.name === e.name) set({ brdf: { ...state.brdf, name: scratch } });
       }
