@@ -33,6 +33,17 @@ inline std::shared_ptr<const BrdfDefinition> builtin(const std::string& name) {
   return inlineBrdf(readSourceFile("shaders/brdfs/" + name + ".brdf"));
 }
 
+// A white Lambertian (f = Kd / pi, Kd = 1): renders as 1.0 in the furnace.
+inline constexpr const char* kWhiteLambert = R"(analytic
+::begin parameters
+color Kd 1 1 1
+::end parameters
+::begin shader
+const float PI = 3.14159265358979323846;
+vec3 BRDF(vec3 L, vec3 V, vec3 N, vec3 X, vec3 Y) { return Kd / PI; }
+::end shader
+)";
+
 // A fixture whose suite shares one renderer (the device opens once per suite).
 class DeviceTest : public ::testing::Test {
  protected:

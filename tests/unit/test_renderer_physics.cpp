@@ -52,16 +52,6 @@ class RendererPhysics : public DeviceTest {
 
 };
 
-constexpr const char* kWhiteLambert = R"(analytic
-::begin parameters
-color Kd 1 1 1
-::end parameters
-::begin shader
-const float PI = 3.14159265358979323846;
-vec3 BRDF(vec3 L, vec3 V, vec3 N, vec3 X, vec3 Y) { return Kd / PI; }
-::end shader
-)";
-
 TEST_F(RendererPhysics, WhiteLambertInFurnaceIsOneWithCosineSampling) {
   auto view = renderer_->createView().value();
   ASSERT_TRUE(view->setScene(furnaceScene(inlineBrdf(kWhiteLambert), 64, 32)).ok());

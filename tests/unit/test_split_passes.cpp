@@ -114,16 +114,6 @@ TEST(SplitPasses, SplitRenderEqualsUnsplitRender) {
   }
 }
 
-constexpr const char* kWhiteLambert = R"(analytic
-::begin parameters
-color Kd 1 1 1
-::end parameters
-::begin shader
-const float PI = 3.14159265358979323846;
-vec3 BRDF(vec3 L, vec3 V, vec3 N, vec3 X, vec3 Y) { return Kd / PI; }
-::end shader
-)";
-
 Scene furnaceScene(std::shared_ptr<const BrdfDefinition> brdf, int size, int samplesPerFrame, int spp) {
   Scene s;
   s.environment.name = "furnace";
