@@ -99,6 +99,20 @@ Result<json> roundTrip(int fd, json head, double seconds) {
 
 class RemoteRenderer;
 
+// The programs of a scene's objects: keys for the quarantine and names for its messages.
+struct ScenePrograms {
+  std::vector<std::string> keys, names;
+};
+
+ScenePrograms programsOf(const Scene& scene) {
+  ScenePrograms p;
+  for (const SceneObject& o : scene.objects) {
+    p.keys.push_back(wire::programKey(*o.brdf));
+    p.names.push_back("'" + o.brdfName + "'");
+  }
+  return p;
+}
+
 class RemoteView : public RenderView {
  public:
   RemoteView(std::shared_ptr<RemoteRenderer> renderer, uint64_t id) : r_(std::move(renderer)), id_(id) {}
@@ -114,14 +128,14 @@ class RemoteView : public RenderView {
  private:
   // Makes the view exist in the current worker, with its last scene (issue 12's restore).
   Result<void> ensureRemote();
-  Result<wire::Message> viewCall(json head, Budget budget, const std::vector<const BrdfDefinition*>& brdfs,
-                                 const std::vector<std::string>& names);
+  Result<wire::Message> viewCall(json head, Budget budget, const ScenePrograms& programs);
 
   std::shared_ptr<RemoteRenderer> r_;
   const uint64_t id_;
   mutable std::mutex mutex_;
   uint64_t generation_ = 0;  // the worker generation the view exists in (0: none yet)
   std::optional<Scene> scene_;
+  ScenePrograms programs_;  // of scene_ (hashing a program's code on every pass would cost)
   std::optional<Error> failed_;  // its pass overran: sticky until a new scene
   FrameStats stats_;
 };
@@ -620,6 +634,7 @@ Result<void> RemoteView::ensureRemote() {
   if (auto failure = r_->takeViewFailure(id_)) {
     failed_ = std::move(failure);
     scene_.reset();
+    programs_ = {};
   }
   Call create;
   create.head = json{{"op", "createView"}, {"view", id_}};
@@ -630,51 +645,44 @@ Result<void> RemoteView::ensureRemote() {
     restore.head = json{{"op", "setScene"}, {"view", id_}, {"scene", wire::toJson(*scene_)}};
     restore.budget = Budget::Build;
     restore.view = id_;
-    for (const SceneObject& o : scene_->objects) {
-      restore.programs.push_back(wire::programKey(*o.brdf));
-      restore.names.push_back("'" + o.brdfName + "'");
-    }
+    restore.programs = programs_.keys;
+    restore.names = programs_.names;
     auto restored = r_->request(std::move(restore));
     if (!restored) {
       // Its scene uses a program quarantined meanwhile (or cannot be built again): the view
       // keeps the error until it gets a new scene.
       failed_ = restored.takeError();
       scene_.reset();
+      programs_ = {};
     }
   }
   generation_ = generation;
   return {};
 }
 
-Result<wire::Message> RemoteView::viewCall(json head, Budget budget, const std::vector<const BrdfDefinition*>& brdfs,
-                                           const std::vector<std::string>& names) {
+Result<wire::Message> RemoteView::viewCall(json head, Budget budget, const ScenePrograms& programs) {
   Call c;
   c.head = std::move(head);
   c.head["view"] = id_;
   c.budget = budget;
   c.view = id_;
-  for (const BrdfDefinition* b : brdfs) c.programs.push_back(wire::programKey(*b));
-  c.names = names;
+  c.programs = programs.keys;
+  c.names = programs.names;
   return r_->request(std::move(c), [this] { return ensureRemote(); });
 }
 
 Result<void> RemoteView::setScene(const Scene& scene) {
   std::lock_guard lock(mutex_);
-  std::vector<const BrdfDefinition*> brdfs;
-  std::vector<std::string> names;
-  for (const SceneObject& o : scene.objects) {
+  for (const SceneObject& o : scene.objects)
     if (!o.brdf) return makeError(ErrorCode::InvalidArgument, "an object has no BRDF");
-    brdfs.push_back(o.brdf.get());
-    names.push_back("'" + o.brdfName + "'");
-  }
-  auto m = viewCall(json{{"op", "setScene"}, {"scene", wire::toJson(scene)}}, Budget::Build, brdfs, names);
+  ScenePrograms programs = programsOf(scene);
+  auto m = viewCall(json{{"op", "setScene"}, {"scene", wire::toJson(scene)}}, Budget::Build, programs);
   if (!m) return m.takeError();
   scene_ = scene;
+  programs_ = std::move(programs);
   failed_.reset();
   stats_ = wire::statsFromJson(m->head.at("value"));
-  std::vector<std::string> keys;
-  for (const BrdfDefinition* b : brdfs) keys.push_back(wire::programKey(*b));
-  r_->noteProven(Budget::Build, keys);
+  r_->noteProven(Budget::Build, programs_.keys);
   return {};
 }
 
@@ -682,19 +690,13 @@ Result<FrameStats> RemoteView::renderPass() {
   std::lock_guard lock(mutex_);
   if (Result<void> ready = ensureRemote(); !ready) return ready.takeError();
   if (failed_) return *failed_;
-  std::vector<const BrdfDefinition*> brdfs;
-  std::vector<std::string> names;
-  if (scene_)
-    for (const SceneObject& o : scene_->objects) brdfs.push_back(o.brdf.get()), names.push_back("'" + o.brdfName + "'");
-  auto m = viewCall(json{{"op", "renderPass"}}, Budget::Pass, brdfs, names);
+  auto m = viewCall(json{{"op", "renderPass"}}, Budget::Pass, programs_);
   if (!m) {
     if (m.error().code == ErrorCode::RenderBudget) failed_ = m.error();
     return m.takeError();
   }
   stats_ = wire::statsFromJson(m->head.at("value"));
-  std::vector<std::string> keys;
-  for (const BrdfDefinition* b : brdfs) keys.push_back(wire::programKey(*b));
-  r_->noteProven(Budget::Pass, keys);
+  r_->noteProven(Budget::Pass, programs_.keys);
   return stats_;
 }
 
@@ -702,7 +704,7 @@ Result<Frame> RemoteView::readFrame(bool linear) {
   std::lock_guard lock(mutex_);
   if (Result<void> ready = ensureRemote(); !ready) return ready.takeError();
   if (failed_) return *failed_;
-  auto m = viewCall(json{{"op", "readFrame"}, {"linear", linear}}, Budget::Pass, {}, {});
+  auto m = viewCall(json{{"op", "readFrame"}, {"linear", linear}}, Budget::Pass, {});
   if (!m) return m.takeError();
   const json& v = m->head.at("value");
   Frame f;
