@@ -13,10 +13,7 @@ thread_local uint64_t tagOfThread = 0;
 
 }  // namespace
 
-const char* kindName(Kind kind) { return kind == Kind::Submission ? "submission" : "pipeline build"; }
-
 void setThreadTag(uint64_t tag) { tagOfThread = tag; }
-uint64_t threadTag() { return tagOfThread; }
 
 Scope::Scope(Kind kind) {
   std::lock_guard lock(mutex);

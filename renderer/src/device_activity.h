@@ -12,11 +12,9 @@
 namespace brdfa::device_activity {
 
 enum class Kind { Submission, PipelineBuild };
-const char* kindName(Kind kind);  // "submission" | "pipeline build"
 
 // The tag of the calling thread's work (0: untagged, e.g. in-process renderers).
 void setThreadTag(uint64_t tag);
-uint64_t threadTag();
 
 struct Entry {
   uint64_t tag = 0;

@@ -17,7 +17,6 @@
 #include <optional>
 #include <set>
 #include <thread>
-#include <tuple>
 
 #include "compile_protocol.h"
 #include "render_wire.h"
