@@ -102,17 +102,6 @@ struct ClassFigures {
   double serverRssMiB = 0;
 };
 
-// Resident memory of a process and its children (the render and compile workers), in MiB.
-double treeRssMiB(pid_t root) {
-  std::ifstream list("/proc/" + std::to_string(root) + "/task/" + std::to_string(root) + "/children");
-  double total = 0;
-  std::ifstream statm("/proc/" + std::to_string(root) + "/statm");
-  unsigned long long size = 0, resident = 0;
-  if (statm >> size >> resident) total += resident * 4096.0 / (1 << 20);
-  for (pid_t child; list >> child;) total += treeRssMiB(child);
-  return total;
-}
-
 // `sessions` sessions of the default scene, each with one stream client, for `seconds`: the
 // frames each received per second.
 bool measureClass(const std::string& serverBinary, const std::string& sourceDir, const std::vector<std::string>& extraArgs,
@@ -156,7 +145,7 @@ bool measureClass(const std::string& serverBinary, const std::string& sourceDir,
     });
   }
   std::this_thread::sleep_for(std::chrono::duration<double>(seconds * 0.9));
-  out.serverRssMiB = treeRssMiB(server.pid());
+  out.serverRssMiB = double(server.treeResidentBytes()) / (1 << 20);
   for (std::thread& t : streams) t.join();
   const double elapsed = msSince(t0) / 1000.0;
   std::vector<double> fps;
@@ -175,12 +164,34 @@ int runHttpBench(const std::string& serverBinary, const std::string& sourceDir) 
   // server's own process (--in-process, as before issue 12), one after the other in one run.
   // $BRDFA_BENCH_BASELINE_SERVER: another build's brdfa-server measured the same way in this run
   // (with no extra flags), for ratios against an earlier version.
+  // $BRDFA_BENCH_ROUNDS (default 1): rounds of all configurations, one after the other in each
+  // round, so a machine's slow phase falls on all of them; each figure is the median over rounds.
   const char* baseline = std::getenv("BRDFA_BENCH_BASELINE_SERVER");
-  ServiceFigures isolated, inProcess, before;
-  if (!measureService(serverBinary, sourceDir, {}, isolated) ||
-      !measureService(serverBinary, sourceDir, {"--in-process"}, inProcess) ||
-      (baseline && !measureService(baseline, sourceDir, {}, before)))
-    return 1;
+  const char* roundsText = std::getenv("BRDFA_BENCH_ROUNDS");
+  const int rounds = std::clamp(roundsText ? std::atoi(roundsText) : 1, 1, 50);
+  std::vector<ServiceFigures> isolatedRuns, inProcessRuns, beforeRuns;
+  for (int round = 0; round < rounds; ++round) {
+    ServiceFigures a, b, c;
+    if (!measureService(serverBinary, sourceDir, {}, a) ||
+        !measureService(serverBinary, sourceDir, {"--in-process"}, b) ||
+        (baseline && !measureService(baseline, sourceDir, {}, c)))
+      return 1;
+    isolatedRuns.push_back(a);
+    inProcessRuns.push_back(b);
+    beforeRuns.push_back(c);
+  }
+  auto medianOf = [](const std::vector<ServiceFigures>& runs) {
+    std::vector<double> edit, slider, fps;
+    for (const ServiceFigures& f : runs) {
+      edit.push_back(f.editMs);
+      slider.push_back(f.sliderMs);
+      fps.push_back(f.fps);
+    }
+    return ServiceFigures{median(edit), median(slider), median(fps)};
+  };
+  const ServiceFigures isolated = medianOf(isolatedRuns), inProcess = medianOf(inProcessRuns),
+                       before = medianOf(beforeRuns);
+  if (rounds > 1) std::printf("(each figure: the median over %d rounds)\n", rounds);
   auto ratio = [](double a, double b) { return "ratio " + std::to_string(a / b).substr(0, 4); };
   header("Service over loopback HTTP (512x512, GGX sphere in the sky, 4 samples/pass)");
   row("PUT new BRDF -> switch scene -> first frame (median of 5)", isolated.editMs, "ms", "target <= 200 (issue: 250)");
@@ -197,20 +208,39 @@ int runHttpBench(const std::string& serverBinary, const std::string& sourceDir) 
   // address (the cap on connections per address raised for it).
   const std::vector<std::string> classArgs{"--max-connections-per-address", "256"};
   std::vector<std::pair<std::string, ClassFigures>> runs;
-  for (int mode = 0; mode < 3; ++mode) {
-    if (mode == 2 && !baseline) break;
-    std::vector<std::string> args = mode == 2 ? std::vector<std::string>{} : classArgs;
-    if (mode == 1) args.push_back("--in-process");
-    ClassFigures f;
-    if (!measureClass(mode == 2 ? baseline : serverBinary, sourceDir, args, 30, 20, f)) return 1;
-    runs.emplace_back(mode == 0 ? "render worker" : mode == 1 ? "--in-process" : "baseline build", f);
+  std::vector<std::vector<ClassFigures>> perMode(3);
+  for (int round = 0; round < rounds; ++round) {
+    for (int mode = 0; mode < 3; ++mode) {
+      if (mode == 2 && !baseline) break;
+      std::vector<std::string> args = mode == 2 ? std::vector<std::string>{} : classArgs;
+      if (mode == 1) args.push_back("--in-process");
+      ClassFigures f;
+      if (!measureClass(mode == 2 ? baseline : serverBinary, sourceDir, args, 30, 20, f)) return 1;
+      perMode[mode].push_back(f);
+    }
   }
+  for (int mode = 0; mode < 3; ++mode) {
+    if (perMode[mode].empty()) continue;
+    std::vector<double> lo, mid, hi, rss;
+    for (const ClassFigures& f : perMode[mode]) {
+      lo.push_back(f.minFps);
+      mid.push_back(f.medianFps);
+      hi.push_back(f.maxFps);
+      rss.push_back(f.serverRssMiB);
+    }
+    runs.emplace_back(mode == 0 ? "render worker" : mode == 1 ? "--in-process" : "baseline build",
+                      ClassFigures{median(lo), median(mid), median(hi), median(rss)});
+  }
+
   header("A class: 30 sessions streaming the default scene for 20 s");
   for (const auto& [name, f] : runs) {
     row("frames/s per session, median: " + name, f.medianFps, "frames/s",
         "slowest " + std::to_string(f.minFps).substr(0, 4) + ", fastest " + std::to_string(f.maxFps).substr(0, 4));
     row("  server and workers, resident memory", f.serverRssMiB, "MiB");
   }
+  if (baseline)
+    row("frames/s per session, render worker / baseline build", runs[0].second.medianFps / runs[2].second.medianFps,
+        "ratio", "issue 12: within 10%");
   return 0;
 }
 

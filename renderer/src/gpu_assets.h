@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "environment_sampling.h"
+#include "memory_ledger.h"
 #include "program_assembler.h"
 #include "vk_resources.h"
 
@@ -21,6 +22,7 @@ struct GpuMesh {
   Buffer indices;
   uint32_t vertexCount = 0;
   uint32_t indexCount = 0;
+  MemoryReservation memory;  // its share of the renderer's memory budget
 };
 
 
@@ -37,6 +39,7 @@ struct GpuEnvironment {
   // RG32UI image, 54-57 % with this buffer). A constant environment has only the header.
   TexelBuffer table;
   std::shared_ptr<const EnvironmentDistribution> distribution;  // the same table on the host; null when constant
+  MemoryReservation memory;  // its share of the renderer's memory budget
 };
 
 // A texture an object samples as iTexture0..3: RGBA8, sRGB-decoding or linear.
@@ -44,6 +47,7 @@ struct GpuTexture {
   std::string name;
   bool srgb = true;
   Image image;  // SHADER_READ_ONLY_OPTIMAL
+  MemoryReservation memory;  // its share of the renderer's memory budget
 };
 
 // A compute pipeline that owns its VkPipeline.
@@ -66,6 +70,7 @@ struct ShadeKernel {
   ParamBlockLayout params;
   uint64_t programHash = 0;  // hash of the assembled source: identifies the compiled program
   uint64_t spirvBytes = 0;   // size of its SPIR-V (what specialization saves shows here)
+  MemoryReservation memory;  // its share of the renderer's memory budget
 };
 
 // Push constants of every compute kernel; mirrors BrdfaPush in shaders/lib/bindings.glsl.

@@ -142,9 +142,12 @@ class RemoteView : public RenderView {
 class RemoteRenderer : public Renderer, public std::enable_shared_from_this<RemoteRenderer> {
  public:
   explicit RemoteRenderer(const RendererOptions& options) : options_(options) {
-    if (options_.workerMemoryBytes == 0 && options_.maxViewMemoryBytes > 0)
-      options_.workerMemoryBytes = options_.maxViewMemoryBytes + (uint64_t(2) << 30);
-    if (!worker_process::kMemoryBudgetsApply) options_.workerMemoryBytes = 0;
+    options_.spareProcesses = 1;  // keepSpare(): one idle worker, counted in the live one's budget
+    // The worker derives its own limit from the budget (RendererImpl::processMemoryLimit); the
+    // one kept here only backs up a worker too stuck to report itself.
+    if (options_.memoryBudgetBytes > 0) supervisorMemoryLimit_ = options_.memoryBudgetBytes + (uint64_t(1) << 30);
+    if (options_.workerMemoryBytes > 0) supervisorMemoryLimit_ = options_.workerMemoryBytes + (uint64_t(1) << 30);
+    if (!worker_process::kMemoryBudgetsApply) supervisorMemoryLimit_ = 0;
 #ifdef BRDFA_RENDER_WORKER_PATH
     workerPath_ = worker_process::find("brdfa-render-worker", "BRDFA_RENDER_WORKER", BRDFA_RENDER_WORKER_PATH);
 #else
@@ -226,7 +229,7 @@ class RemoteRenderer : public Renderer, public std::enable_shared_from_this<Remo
     std::lock_guard lock(mutex_);
     out.workerRestarts = restarts_;
     out.quarantinedPrograms = quarantine_.size();
-    if (!m) out.viewMemoryBudget = options_.maxViewMemoryBytes;
+    if (!m) out.memory.budget = options_.memoryBudgetBytes;
     return out;
   }
 
@@ -491,6 +494,7 @@ class RemoteRenderer : public Renderer, public std::enable_shared_from_this<Remo
         if (it != pending_.end()) culprit = it->second;
         kind = overrun_->value("kind", std::string("pass"));
         resource = overrun_->value("resource", std::string("time"));
+        if (resource == "memory") memoryLimit_ = overrun_->value("limit", supervisorMemoryLimit_);
         replace = true;
       } else if (exited_) {
         replace = true;
@@ -499,12 +503,12 @@ class RemoteRenderer : public Renderer, public std::enable_shared_from_this<Remo
         kind = culprit && culprit->budget == Budget::Build ? "build" : "pass";
         resource = "time";
         replace = true;
-      } else if (options_.workerMemoryBytes > 0 &&
-                 worker_process::residentBytes(worker_.pid) > options_.workerMemoryBytes + (uint64_t(1) << 30)) {
+      } else if (supervisorMemoryLimit_ > 0 && worker_process::residentBytes(worker_.pid) > supervisorMemoryLimit_) {
         // Past the worker's own watch (it reads its size every 50 ms): it is not looking.
         culprit = oldestPending();
         kind = "build";
         resource = "memory";
+        memoryLimit_ = supervisorMemoryLimit_;
         replace = true;
       }
       if (replace) replace_(lock, culprit, kind, resource);
@@ -514,7 +518,7 @@ class RemoteRenderer : public Renderer, public std::enable_shared_from_this<Remo
   Error blameError(const Pending& p, const std::string& kind, const std::string& resource,
                    const std::vector<std::string>& quarantined) const {
     const bool build = kind == "build";
-    std::string budget = resource == "memory" ? "the render worker's memory budget of " + mibText(options_.workerMemoryBytes)
+    std::string budget = resource == "memory" ? "the render worker's memory budget of " + mibText(memoryLimit_)
                          : p.budget == Budget::Check ? "the check budget of " + secondsText(options_.checkSeconds)
                          : build ? "the pipeline build budget of " + secondsText(options_.buildSeconds)
                                  : "the budget of " + secondsText(options_.passSeconds) + " per submission";
@@ -591,6 +595,8 @@ class RemoteRenderer : public Renderer, public std::enable_shared_from_this<Remo
   }
 
   RendererOptions options_;
+  uint64_t supervisorMemoryLimit_ = 0;  // the worker's resident memory past which it is replaced from here
+  uint64_t memoryLimit_ = 0;            // the limit the last memory overrun passed (for its message)
   std::string workerPath_;
   DeviceInfo device_;
   mutable std::mutex mutex_;

@@ -303,6 +303,7 @@ Result<std::vector<RenderViewImpl::ObjectState>> RenderViewImpl::buildObjects(co
 Result<void> RenderViewImpl::setScene(const Scene& scene) {
   BRDFA_TRY(checkScene(scene));
   std::lock_guard<std::mutex> lock(mutex_);
+  const uint64_t dropsBefore = r_->memoryUsage().drops;
   auto env = r_->environment(scene.environment.name);
   if (!env) {
     Error e = env.takeError();
@@ -386,6 +387,9 @@ Result<void> RenderViewImpl::setScene(const Scene& scene) {
   stats_.vertices = stats_.triangles = stats_.programBytes = 0;
   stats_.estimator.clear();
   stats_.warnings.clear();
+  // Optional caches dropped to make room for this scene: said where the user looks.
+  if (const MemoryUsage memory = r_->memoryUsage(); memory.drops != dropsBefore)
+    stats_.warnings.push_back("memory: " + memory.lastDropped);
   std::vector<std::string> estimators;  // distinct, in object order
   for (size_t i = 0; i < objects_.size(); ++i) {
     const ShadeVariant& v = objects_[i].variant;

@@ -16,8 +16,10 @@ NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(RenderSettings, width, height, samplesPerFram
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(TextureBinding, name, srgb)
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(DeviceInfo, name, type, driver, apiVersion)
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(CompileInfo, warnings, compileMs, cached)
+NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(MemoryUsage, budget, fixed, renderTargets, assets, transfers, programs, compiles,
+                                   droppedBytes, drops, lastDropped)
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(RendererCounters, glslCompiles, spirvCacheHits, spirvDiskHits, pipelinesCreated,
-                                   viewMemoryBytes, viewMemoryBudget, workerRestarts, quarantinedPrograms)
+                                   memory, workerRestarts, quarantinedPrograms)
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(BrdfCheckReport, evaluations, nanCount, infCount, negativeCount, maxAlbedo,
                                    albedoAboveOne, maxReciprocityError, ms)
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(SamplerCheckConfig, normalLabel, normal, tangent, bitangent, view, viewDeg,
@@ -42,7 +44,7 @@ using nlohmann::json;
 // must be added there too (then update the size here). x86-64 Linux, the one target built.
 #if defined(__x86_64__) && defined(__linux__)
 static_assert(sizeof(FrameStats) == 184, "FrameStats changed: update toJson/statsFromJson");
-static_assert(sizeof(RendererOptions) == 224, "RendererOptions changed: update toJson/optionsFromJson");
+static_assert(sizeof(RendererOptions) == 256, "RendererOptions changed: update toJson/optionsFromJson");
 static_assert(sizeof(SceneObject) == 192, "SceneObject changed: update toJson(Scene)/sceneFromJson");
 #endif
 
@@ -197,7 +199,9 @@ json toJson(const RendererOptions& o) {
               {"cacheDir", o.cacheDir},           {"loadCache", o.loadCache},
               {"driverCacheDir", o.driverCacheDir}, {"compileSeconds", o.compileSeconds},
               {"compileMemoryMiB", o.compileMemoryMiB}, {"compileWorkers", o.compileWorkers},
-              {"maxViewMemoryBytes", o.maxViewMemoryBytes}, {"buildSeconds", o.buildSeconds},
+              {"memoryBudgetBytes", o.memoryBudgetBytes}, {"memoryBudgetLabel", o.memoryBudgetLabel},
+              {"spareProcesses", o.spareProcesses},
+              {"buildSeconds", o.buildSeconds},
               {"passSeconds", o.passSeconds},       {"checkSeconds", o.checkSeconds},
               {"submissionTargetMs", o.submissionTargetMs},     {"workerMemoryBytes", o.workerMemoryBytes}};
 }
@@ -214,7 +218,9 @@ RendererOptions optionsFromJson(const json& j) {
   j.at("compileSeconds").get_to(o.compileSeconds);
   j.at("compileMemoryMiB").get_to(o.compileMemoryMiB);
   j.at("compileWorkers").get_to(o.compileWorkers);
-  j.at("maxViewMemoryBytes").get_to(o.maxViewMemoryBytes);
+  j.at("memoryBudgetBytes").get_to(o.memoryBudgetBytes);
+  j.at("memoryBudgetLabel").get_to(o.memoryBudgetLabel);
+  j.at("spareProcesses").get_to(o.spareProcesses);
   j.at("buildSeconds").get_to(o.buildSeconds);
   j.at("passSeconds").get_to(o.passSeconds);
   j.at("checkSeconds").get_to(o.checkSeconds);

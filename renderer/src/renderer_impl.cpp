@@ -19,6 +19,7 @@
 #include "environment_sampling.h"
 #include "meshes.h"
 #include "obj_loader.h"
+#include "worker_process.h"
 #include "render_view.h"
 #include "spirv_resources.h"
 #include "vk_check.h"
@@ -27,6 +28,16 @@ namespace brdfa {
 
 namespace {
 constexpr size_t kMaxCachedPrograms = 256;
+// What one built shading pipeline is counted at against the memory budget: the worker's
+// resident memory grew by 3.8 MiB a pipeline over 13 pipelines on lavapipe (LLVM's machine code
+// and its bookkeeping); a GPU driver keeps less on the host.
+constexpr uint64_t kPipelineBytesEstimate = 4ull << 20;
+// What a device process grows by after start that no reservation names (llvmpipe's first
+// shading pipelines, the driver's caches): 38 MiB between start and the first frames of a
+// session at 128^2 (lavapipe, Mesa 22.3).
+constexpr uint64_t kDriverGrowthBytes = 40ull << 20;
+// A brdfa-compile-worker between compiles: 33 MiB resident (glslang 11.13, Debian 12).
+constexpr uint64_t kIdleCompileWorkerBytes = 36ull << 20;
 constexpr VkFormat kGbufferFormat = VK_FORMAT_R32G32B32A32_SFLOAT;
 constexpr VkFormat kDepthFormat = VK_FORMAT_D32_SFLOAT;
 
@@ -54,7 +65,7 @@ Result<std::shared_ptr<RendererImpl>> RendererImpl::create(const RendererOptions
 
 Result<void> RendererImpl::init(const RendererOptions& options) {
   diskCache_ = std::make_unique<SpirvDiskCache>(options.cacheDir, options.loadCache);
-  viewMemoryBudget_ = options.maxViewMemoryBytes;
+  ledger_ = std::make_unique<MemoryLedger>(options.memoryBudgetBytes, options.memoryBudgetLabel);
   const size_t workers = options.compileWorkers > 0
                              ? options.compileWorkers
                              : std::max<size_t>(2, std::thread::hardware_concurrency());
@@ -106,6 +117,19 @@ Result<void> RendererImpl::init(const RendererOptions& options) {
   whiteTexture_ = std::move(image.value());
   const uint32_t texel = 0xffffffffu;
   BRDFA_TRY(uploadImage(*ctx_, whiteTexture_, &texel, sizeof texel));
+  // What the process holds now (driver, LLVM, fixed pipelines: ~70 MiB on lavapipe, and what it
+  // grows by unasked), and its
+  // compile workers idle are paid before any session, once for this process and once for each
+  // idle copy kept ready; what the compile workers may grow to while compiling, once.
+  const uint64_t own = worker_process::residentBytes(::getpid()) + kDriverGrowthBytes;
+  const uint64_t copies = 1 + uint64_t(options.spareProcesses);
+  const uint64_t compileCap = uint64_t(options.compileMemoryMiB) << 20;
+  const uint64_t idle = std::min(kIdleCompileWorkerBytes, compileCap);
+  ledger_->add(MemoryUse::Fixed, (own + workers * idle) * copies);
+  ledger_->add(MemoryUse::Compiles, workers * (compileCap - idle));
+  // This process may grow into whatever of the budget the other processes do not hold.
+  const uint64_t others = (own + workers * idle) * copies - own + workers * (compileCap - idle);
+  processMemoryLimit_ = options.memoryBudgetBytes ? options.memoryBudgetBytes - std::min(others, options.memoryBudgetBytes) : 0;
   return {};
 }
 
@@ -381,10 +405,20 @@ Result<std::shared_ptr<const SpirvBinary>> RendererImpl::spirv(ShaderStage stage
     diskCache_->store(key, source.size(), compiled->words);
     shared = std::make_shared<const SpirvBinary>(std::move(compiled.value()));
   }
-  std::lock_guard<std::mutex> lock(spirvMutex_);
-  if (spirvCache_.emplace(key, shared).second) spirvOrder_.push_back(key);
-  evictOldest(spirvCache_, spirvOrder_);
   if (cached) *cached = false;
+  // Keeping it in memory is optional: when the budget has no room, it is served from disk.
+  const uint64_t bytes = shared->words.size() * sizeof(uint32_t);
+  if (!ledger_->reserve(MemoryUse::Programs, bytes, "a SPIR-V cache entry")) return shared;
+  MemoryReservation held(ledger_.get(), MemoryUse::Programs, bytes);
+  std::lock_guard<std::mutex> lock(spirvMutex_);
+  if (!spirvCache_.emplace(key, shared).second) return shared;  // another thread cached it first
+  spirvMemory_[key] = std::move(held);
+  spirvOrder_.push_back(key);
+  while (spirvOrder_.size() > kMaxCachedPrograms) {
+    spirvCache_.erase(spirvOrder_.front());
+    spirvMemory_.erase(spirvOrder_.front());
+    spirvOrder_.pop_front();
+  }
   return shared;
 }
 
@@ -556,6 +590,13 @@ Result<std::shared_ptr<const ShadeKernel>> RendererImpl::compiledKernel(const As
   auto code = spirv(ShaderStage::Compute, program.source, nullptr, compileOnMiss);
   if (!code) return code.takeError();
   BRDFA_TRY(checkResources(**code, nullptr));
+  const uint64_t spirvBytes = (*code)->words.size() * sizeof(uint32_t);
+  MemoryReservation memory;
+  {
+    const uint64_t bytes = kPipelineBytesEstimate + spirvBytes;
+    BRDFA_TRY(ledger_->reserve(MemoryUse::Programs, bytes, "building a program", shrinker({.kernels = true})));
+    memory = MemoryReservation(ledger_.get(), MemoryUse::Programs, bytes);
+  }
   auto kernel = createComputeKernel((*code)->words);
   if (!kernel) return kernel.takeError();
   ++pipelinesCreated_;
@@ -564,7 +605,8 @@ Result<std::shared_ptr<const ShadeKernel>> RendererImpl::compiledKernel(const As
   compiled->kernel = std::move(kernel.value());
   compiled->params = program.params;
   compiled->programHash = program.hash;
-  compiled->spirvBytes = (*code)->words.size() * sizeof(uint32_t);
+  compiled->spirvBytes = spirvBytes;
+  compiled->memory = std::move(memory);
   kernelCache_.emplace(program.hash, compiled);
   kernelOrder_.push_back(program.hash);
   evictOldest(kernelCache_, kernelOrder_);
@@ -634,6 +676,20 @@ std::shared_ptr<const T> lockCached(std::map<std::string, std::weak_ptr<const T>
   return strong;
 }
 
+// What an asset's data holds on the host (decoded), and what its upload makes on the device:
+// the budget's figures for them (upper bounds where the device form is chosen at upload).
+uint64_t hostBytes(const MeshData& m) { return m.vertices.size() * sizeof(Vertex) + m.indices.size() * 4; }
+uint64_t deviceBytes(const MeshData& m) { return hostBytes(m); }
+uint64_t hostBytes(const TextureData& t) { return t.rgba8.size(); }
+uint64_t deviceBytes(const TextureData& t) { return uint64_t(t.width) * t.height * 4; }
+uint64_t hostBytes(const EnvironmentData& e) { return e.texels.size() * sizeof(float); }
+uint64_t deviceBytes(const EnvironmentData& e) {
+  const uint64_t cube = uint64_t(e.faceSize) * e.faceSize * 6 * 4 * sizeof(uint16_t);  // RGBA16F
+  // The sampling table, on the device and again on the host (EnvironmentDistribution).
+  const uint64_t table = e.constant ? 0 : 2 * (6ull * kMaxCellsPerEdge * kMaxCellsPerEdge + 1) * 8;
+  return cube + table;
+}
+
 }  // namespace
 
 Result<void> RendererImpl::registerAsset(const std::string& name, AssetKind kind, const std::string& path) {
@@ -670,8 +726,22 @@ Result<std::shared_ptr<const Gpu>> RendererImpl::findOrLoad(AssetKind kind, cons
                                                             MakeBuiltin makeBuiltin, Decode decode, Upload upload) {
   if (auto it = builtins.find(key); it != builtins.end()) return it->second;
   if (auto cached = lockCached(uploads, key)) return cached;
+  const std::string what = std::string("the ") + assetKindName(kind) + " '" + name + "'";
+  // Reserves what the asset will hold on the device, and for the upload's length its decoded
+  // data and staging buffers, then uploads it.
+  auto place = [&](const auto& data) -> Result<std::shared_ptr<Gpu>> {
+    const uint64_t resident = deviceBytes(data);
+    BRDFA_TRY(ledger_->reserve(MemoryUse::Transfers, hostBytes(data) + resident, what, shrinker({.assets = true})));
+    MemoryReservation transfer(ledger_.get(), MemoryUse::Transfers, hostBytes(data) + resident);
+    BRDFA_TRY(ledger_->reserve(MemoryUse::Assets, resident, what, shrinker({.assets = true})));
+    MemoryReservation memory(ledger_.get(), MemoryUse::Assets, resident);
+    auto gpu = upload(data);
+    if (!gpu) return gpu.takeError();
+    (*gpu)->memory = std::move(memory);
+    return gpu;
+  };
   if (auto builtin = makeBuiltin()) {
-    auto gpu = upload(*builtin);
+    auto gpu = place(*builtin);
     if (!gpu) return gpu.takeError();
     builtins[key] = gpu.value();
     return std::shared_ptr<const Gpu>(gpu.value());
@@ -680,9 +750,12 @@ Result<std::shared_ptr<const Gpu>> RendererImpl::findOrLoad(AssetKind kind, cons
   if (!path) return path.takeError();
   auto bytes = readWholeFile(*path);
   if (!bytes) return assetError(bytes.takeError(), kind, name);
+  // The file and what it decodes to are in flight until the upload ends.
+  BRDFA_TRY(ledger_->reserve(MemoryUse::Transfers, bytes->size(), what, shrinker({.assets = true})));
+  MemoryReservation file(ledger_.get(), MemoryUse::Transfers, bytes->size());
   auto data = decode(std::string_view(*bytes));
   if (!data) return assetError(data.takeError(), kind, name);
-  auto gpu = upload(*data);
+  auto gpu = place(*data);
   if (!gpu) return gpu.takeError();
   uploads[key] = gpu.value();
   return std::shared_ptr<const Gpu>(gpu.value());
@@ -795,30 +868,85 @@ Result<std::shared_ptr<const GpuTexture>> RendererImpl::texture(const std::strin
 }
 
 RendererCounters RendererImpl::counters() const {
-  return RendererCounters{glslCompiles_.load(), spirvCacheHits_.load(), spirvDiskHits_.load(),
-                          pipelinesCreated_.load(), viewMemory_.load(), viewMemoryBudget_};
+  RendererCounters c{glslCompiles_.load(), spirvCacheHits_.load(), spirvDiskHits_.load(), pipelinesCreated_.load()};
+  c.memory = ledger_->usage();
+  return c;
+}
+
+Result<void> RendererImpl::exchangeViewMemory(uint64_t oldBytes, uint64_t newBytes, const std::string& what,
+                                              std::string* dropped) {
+  return ledger_->exchange(MemoryUse::RenderTargets, oldBytes, newBytes, what, shrinker({}), dropped);
 }
 
 namespace {
-std::string mebibytes(uint64_t bytes) {
-  char text[32];
-  std::snprintf(text, sizeof text, "%.0f MiB", double(bytes) / (1024.0 * 1024.0));
-  return text;
+// Erases entries of `cache` (oldest first, in `order`) that nothing but the cache holds, until
+// `freed` reaches `needed`; counts them in `count`.
+template <class Map>
+void dropUnused(Map& cache, std::deque<uint64_t>& order, uint64_t needed, uint64_t& freed, int& count,
+                const std::function<uint64_t(uint64_t)>& bytesOf) {
+  for (auto it = order.begin(); it != order.end() && freed < needed;) {
+    auto entry = cache.find(*it);
+    if (entry != cache.end() && entry->second.use_count() == 1) {
+      freed += bytesOf(*it);
+      ++count;
+      cache.erase(entry);
+      it = order.erase(it);
+    } else {
+      ++it;
+    }
+  }
+}
+
+template <class Gpu>
+void dropUnusedAssets(std::map<std::string, std::shared_ptr<const Gpu>>& cache, uint64_t needed, uint64_t& freed,
+                      std::vector<std::string>& names) {
+  for (auto it = cache.begin(); it != cache.end() && freed < needed;) {
+    if (it->second.use_count() == 1) {
+      freed += it->second->memory.bytes();
+      names.push_back(it->second->name);
+      it = cache.erase(it);
+    } else {
+      ++it;
+    }
+  }
 }
 }  // namespace
 
-Result<void> RendererImpl::exchangeViewMemory(uint64_t oldBytes, uint64_t newBytes, const std::string& what) {
-  uint64_t used = viewMemory_.load();
-  do {
-    const uint64_t others = used - std::min(used, oldBytes);
-    if (viewMemoryBudget_ && newBytes > oldBytes && others + newBytes > viewMemoryBudget_)
-      return makeError(ErrorCode::OverBudget, what + " needs " + mebibytes(newBytes) + " of render targets, and the " +
-                                                  "server's memory budget for them (--max-memory " +
-                                                  mebibytes(viewMemoryBudget_) + ") has " +
-                                                  mebibytes(viewMemoryBudget_ - std::min(others, viewMemoryBudget_)) +
-                                                  " left: use a smaller render size, or close other sessions");
-  } while (!viewMemory_.compare_exchange_weak(used, used - std::min(used, oldBytes) + newBytes));
-  return {};
+std::string RendererImpl::dropUnusedCaches(uint64_t needed, HeldLocks held) {
+  uint64_t freed = 0;
+  int programs = 0, spirv = 0;
+  std::vector<std::string> assets;
+  // A lock this thread does not hold is taken only if it is free: a shrink never waits.
+  auto withLock = [](std::mutex& m, bool heldByCaller, auto&& body) {
+    if (heldByCaller) return body();
+    std::unique_lock lock(m, std::try_to_lock);
+    if (lock.owns_lock()) body();
+  };
+  withLock(kernelMutex_, held.kernels, [&] {
+    dropUnused(kernelCache_, kernelOrder_, needed, freed, programs,
+               [&](uint64_t key) { return kernelCache_.at(key)->memory.bytes(); });
+  });
+  withLock(spirvMutex_, false, [&] {
+    dropUnused(spirvCache_, spirvOrder_, needed, freed, spirv, [&](uint64_t key) {
+      const uint64_t bytes = spirvMemory_[key].bytes();
+      spirvMemory_.erase(key);
+      return bytes;
+    });
+  });
+  withLock(assetMutex_, held.assets, [&] {
+    dropUnusedAssets(environments_, needed, freed, assets);
+    dropUnusedAssets(meshes_, needed, freed, assets);
+    dropUnusedAssets(textures_, needed, freed, assets);
+  });
+  if (freed == 0) return {};
+  std::string what;
+  auto add = [&](const std::string& part) { what += (what.empty() ? "" : ", ") + part; };
+  if (programs) add(std::to_string(programs) + " cached program" + (programs == 1 ? "" : "s"));
+  if (spirv) add(std::to_string(spirv) + " cached SPIR-V module" + (spirv == 1 ? "" : "s"));
+  for (const std::string& name : assets) add("the unused asset '" + name + "'");
+  what = "dropped " + what + " (" + mebibytesText(freed) + ") to stay within the memory budget; they are rebuilt when used";
+  ledger_->noteDropped(freed, what);
+  return what;
 }
 
 namespace {

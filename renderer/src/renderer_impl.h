@@ -16,6 +16,7 @@
 #include "spirv_resources.h"
 #include "glsl_compiler.h"
 #include "image_decode.h"
+#include "memory_ledger.h"
 #include "meshes.h"
 #include "gpu_assets.h"
 #include "shader_sources.h"
@@ -47,11 +48,18 @@ class RendererImpl final : public Renderer, public std::enable_shared_from_this<
   Result<EnvironmentSamplerReport> checkEnvironmentSampler(const std::string& environment) override;
   Result<int> preloadFromCache(const BrdfDefinition& brdf) override;
   RendererCounters counters() const override;
-  // Render-target memory of views against RendererOptions::maxViewMemoryBytes: replaces a
-  // view's reservation of `oldBytes` by `newBytes` in one step, or, when that would pass the
-  // budget, changes nothing and fails with OverBudget (its message names `what` and the
-  // budget). Giving back (newBytes <= oldBytes) never fails.
-  Result<void> exchangeViewMemory(uint64_t oldBytes, uint64_t newBytes, const std::string& what);
+  // Render-target memory of views against the renderer's memory budget: replaces a view's
+  // reservation of `oldBytes` by `newBytes` in one step. When that would pass the budget,
+  // unused cached programs and assets are dropped first (what was dropped is in `*dropped`);
+  // if it still does not fit, nothing changes and the call fails with OverBudget (its message
+  // names `what` and the budget). Giving back (newBytes <= oldBytes) never fails.
+  MemoryUsage memoryUsage() const { return ledger_->usage(); }
+  // The resident memory this process may reach: the budget less what it reserves for the other
+  // processes (the spare copy, compile workers). 0: no budget. The render worker stops the work
+  // in flight past it (RendererOptions::workerMemoryBytes overrides it).
+  uint64_t processMemoryLimit() const { return processMemoryLimit_; }
+  Result<void> exchangeViewMemory(uint64_t oldBytes, uint64_t newBytes, const std::string& what,
+                                  std::string* dropped = nullptr);
   Result<void> registerAsset(const std::string& name, AssetKind kind, const std::string& path) override;
   std::vector<std::string> environmentNames() const override;
   std::vector<std::string> meshNames() const override;
@@ -114,6 +122,20 @@ class RendererImpl final : public Renderer, public std::enable_shared_from_this<
                                                             bool compileOnMiss = true, bool* created = nullptr);
 
   std::unique_ptr<VkContext> ctx_;  // declared first: destroyed last
+  std::unique_ptr<MemoryLedger> ledger_;  // outlives every reservation the caches below hold
+  uint64_t processMemoryLimit_ = 0;
+
+  // Which of the cache locks the caller of dropUnusedCaches holds (it takes the others only if
+  // they are free, so it never waits and never deadlocks).
+  struct HeldLocks {
+    bool kernels = false, assets = false;
+  };
+  // MemoryLedger::Shrink: drops cached programs, SPIR-V and built-in assets that nothing but the
+  // cache holds, oldest first, until `needed` bytes are given back.
+  std::string dropUnusedCaches(uint64_t needed, HeldLocks held);
+  MemoryLedger::Shrink shrinker(HeldLocks held) {
+    return [this, held](uint64_t needed) { return dropUnusedCaches(needed, held); };
+  }
   ShaderSources sources_;
   VkDescriptorSetLayout viewSetLayout_ = VK_NULL_HANDLE;
   VkDescriptorSetLayout objectSetLayout_ = VK_NULL_HANDLE;
@@ -129,6 +151,7 @@ class RendererImpl final : public Renderer, public std::enable_shared_from_this<
 
   std::mutex spirvMutex_;
   std::unordered_map<uint64_t, std::shared_ptr<const SpirvBinary>> spirvCache_;
+  std::unordered_map<uint64_t, MemoryReservation> spirvMemory_;  // what each entry above holds
   std::deque<uint64_t> spirvOrder_;  // insertion order, for a bounded cache
 
   std::mutex kernelMutex_;
@@ -136,8 +159,6 @@ class RendererImpl final : public Renderer, public std::enable_shared_from_this<
   std::deque<uint64_t> kernelOrder_;
 
   std::atomic<uint64_t> glslCompiles_{0}, spirvCacheHits_{0}, spirvDiskHits_{0}, pipelinesCreated_{0};
-  std::atomic<uint64_t> viewMemory_{0};
-  uint64_t viewMemoryBudget_ = 0;
   std::unique_ptr<SpirvDiskCache> diskCache_;
   std::unique_ptr<CompilePool> compilePool_;  // every GLSL compile runs there
   std::set<DescriptorSlot> computeSlots_;      // the layout's slots a compute program may use

@@ -20,6 +20,7 @@
 #include "compile_protocol.h"
 #include "device_activity.h"
 #include "render_wire.h"
+#include "renderer_impl.h"
 #include "worker_process.h"
 
 namespace brdfa {
@@ -100,7 +101,10 @@ class Worker {
         auto work = device_activity::oldest(device_activity::Kind::PipelineBuild);
         if (!work) work = device_activity::oldest();
         const bool build = work && work->kind == device_activity::Kind::PipelineBuild;
-        event = json{{"id", work ? work->tag : 0}, {"kind", build ? "build" : "pass"}, {"resource", "memory"}};
+        event = json{{"id", work ? work->tag : 0},
+                     {"kind", build ? "build" : "pass"},
+                     {"resource", "memory"},
+                     {"limit", o.workerMemoryBytes}};
       }
       if (event.is_null()) continue;
       event["event"] = "overrun";
@@ -234,9 +238,12 @@ int main() {
   try {
     options = render_wire::optionsFromJson(start.head.at("options"));
     options.isolate = false;  // this process is the isolation
-    Result<std::shared_ptr<Renderer>> created = Renderer::create(options);
+    Result<std::shared_ptr<RendererImpl>> created = RendererImpl::create(options);
     if (created) {
       renderer = created.value();
+      // Past what the budget leaves this process, the work in flight is stopped.
+      if (options.workerMemoryBytes == 0 && worker_process::kMemoryBudgetsApply)
+        options.workerMemoryBytes = created.value()->processMemoryLimit();
       hello.head["ok"] = true;
       hello.head["value"] = render_wire::toJson(renderer->device());
     } else {

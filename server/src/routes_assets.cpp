@@ -69,6 +69,35 @@ void registerAssetRoutes(httplib::Server& server, Service& service) {
       reader([](const char*, size_t) { return true; });  // drain: the answer does not need it
       return badUpload(res, "an upload is multipart/form-data with a `file` part (and optionally `kind`)");
     }
+    // The body's bytes are held until the upload is stored: they count against the uploads' share
+    // of --max-memory from before the first is read (the largest body when the length is not
+    // given up front).
+    uint64_t length = service.maxRequestBody();
+    if (req.has_header("Content-Length"))
+      length = std::min<uint64_t>(length, std::strtoull(req.get_header_value("Content-Length").c_str(), nullptr, 10));
+    RenderSlots& memory = *service.uploadMemory;
+    // Read and dropped: a client still sending would not see the answer.
+    auto drain = [&] {
+      reader([](const httplib::MultipartFormData&) { return true; }, [](const char*, size_t) { return true; });
+    };
+    if (length > memory.capacity()) {
+      drain();
+      return sendError(res, 507, "memory_budget",
+                       "an upload of " + std::to_string(length >> 20) + " MiB does not fit the uploads' share (" +
+                           std::to_string(memory.capacity() >> 20) + " MiB, an eighth) of the server's memory budget "
+                           "(--max-memory " + std::to_string(service.memoryBudgetBytes >> 20) + " MiB)");
+    }
+    if (!memory.acquire(kUploadMemoryWait, length)) {
+      drain();
+      res.set_header("Retry-After", "1");
+      return sendError(res, 503, "busy",
+                       "other uploads in flight hold the uploads' share of the memory budget; try again");
+    }
+    struct Held {
+      RenderSlots& slots;
+      uint64_t bytes;
+      ~Held() { slots.release(bytes); }
+    } held{memory, length};
     // One byte past the limit is enough to know a file is too large; its full size is counted.
     std::vector<FormPart> parts;
     size_t extraParts = 0;

@@ -69,6 +69,29 @@ void setFrameHeaders(httplib::Response& res, const FrameStats& stats) {
   res.set_header("Cache-Control", "no-store");
 }
 
+namespace {
+// /api/health's `memory`: --max-memory and what holds it now, the renderer's uses and the
+// uploads in flight here (docs/api.md, Health).
+nlohmann::json memoryJson(const Service& service, const MemoryUsage& m) {
+  const uint64_t uploads = service.uploadMemory->taken();
+  return {{"budget_bytes", service.memoryBudgetBytes},
+          {"used_bytes", m.total() + uploads},
+          {"render_targets_bytes", m.renderTargets},
+          {"renderer",
+           {{"budget_bytes", m.budget},
+            {"process_bytes", m.fixed},
+            {"render_targets_bytes", m.renderTargets},
+            {"assets_bytes", m.assets},
+            {"transfers_bytes", m.transfers},
+            {"programs_bytes", m.programs},
+            {"compiles_bytes", m.compiles},
+            {"dropped_bytes", m.droppedBytes},
+            {"drops", m.drops},
+            {"last_dropped", m.lastDropped}}},
+          {"uploads", {{"budget_bytes", service.uploadMemory->capacity()}, {"in_flight_bytes", uploads}}}};
+}
+}  // namespace
+
 void registerSystemRoutes(httplib::Server& server, Service& service) {
   // Responses httplib makes by itself (unknown route, 413, 414, ...) get the JSON error body;
   // responses a handler already filled pass through untouched.
@@ -122,7 +145,7 @@ void registerSystemRoutes(httplib::Server& server, Service& service) {
                 {"spirv_cache_hits", c.spirvCacheHits},
                 {"spirv_disk_hits", c.spirvDiskHits},
                 {"pipelines_created", c.pipelinesCreated}}},
-              {"memory", {{"render_targets_bytes", c.viewMemoryBytes}, {"budget_bytes", c.viewMemoryBudget}}},
+              {"memory", memoryJson(service, c.memory)},
               {"render_worker",
                {{"isolated", !service.config.inProcess},
                 {"restarts", c.workerRestarts},

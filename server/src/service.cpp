@@ -10,23 +10,29 @@
 
 namespace brdfa::server {
 
-bool RenderSlots::acquire(std::chrono::milliseconds timeout) {
+bool RenderSlots::acquire(std::chrono::milliseconds timeout, uint64_t units) {
   std::unique_lock lock(mutex_);
-  if (free_ == 0 && waiting_ >= maxWaiting_) return false;
+  if (units > capacity_ || (free_ < units && waiting_ >= maxWaiting_)) return false;
   ++waiting_;
-  bool got = cv_.wait_for(lock, timeout, [&] { return shutdown_ || free_ > 0; });
+  bool got = cv_.wait_for(lock, timeout, [&] { return shutdown_ || free_ >= units; });
   --waiting_;
   if (!got || shutdown_) return false;
-  --free_;
+  free_ -= units;
   return true;
 }
 
-void RenderSlots::release() {
+void RenderSlots::release(uint64_t units) {
   {
     std::lock_guard lock(mutex_);
-    ++free_;
+    free_ += units;
   }
-  cv_.notify_one();
+  // Waiters want different amounts: each checks whether it fits now.
+  cv_.notify_all();
+}
+
+uint64_t RenderSlots::taken() const {
+  std::lock_guard lock(mutex_);
+  return capacity_ - free_;
 }
 
 void RenderSlots::shutdown() {
@@ -75,10 +81,21 @@ Result<std::unique_ptr<Service>> Service::create(const ServerConfig& config, std
   options.driverCacheDir = (std::filesystem::path(config.dataDir) / "cache" / "mesa").string();
   options.loadCache = config.loadCache;
   options.compileSeconds = config.compileTimeoutSec;
-  options.compileMemoryMiB = static_cast<size_t>(config.compileMemoryMiB);
   // Half the machine's RAM unless told: the rest is for the driver, uploads, caches and the OS.
   const uint64_t ram = uint64_t(sysconf(_SC_PHYS_PAGES)) * uint64_t(sysconf(_SC_PAGESIZE));
-  options.maxViewMemoryBytes = config.maxMemoryMiB ? config.maxMemoryMiB << 20 : ram / 2;
+  // One budget, two holders: upload bodies in flight here (an eighth), everything the renderer
+  // holds there (the rest; MemoryUsage lists it).
+  const uint64_t budget = config.maxMemoryMiB ? config.maxMemoryMiB << 20 : ram / 2;
+  const uint64_t uploadShare = budget / 8;
+  service->memoryBudgetBytes = budget;
+  service->uploadMemory = std::make_unique<RenderSlots>(uploadShare, kMaxQueuedUploadChecks);
+  options.memoryBudgetBytes = budget - uploadShare;
+  // A compile's memory is part of the budget: a sixteenth of it, unless told (64 MiB is ~2x what
+  // glslang needs for Disney's BRDF with the integrator).
+  options.compileMemoryMiB = config.compileMemoryMiB > 0 ? size_t(config.compileMemoryMiB)
+                                                         : size_t(std::clamp<uint64_t>(budget >> 24, 64, 1024));
+  options.memoryBudgetLabel = "the server's memory budget (--max-memory " + std::to_string(budget >> 20) + " MiB, " +
+                              std::to_string(options.memoryBudgetBytes >> 20) + " MiB of it for the renderer)";
   options.isolate = !config.inProcess;
   options.buildSeconds = config.buildBudgetSec;
   options.passSeconds = config.passBudgetSec;
@@ -151,6 +168,7 @@ void Service::beginShutdown() {
   hotLoader.stop();
   renderSlots.shutdown();
   uploadSlots.shutdown();
+  if (uploadMemory) uploadMemory->shutdown();
   if (sessions) sessions->stopAll();
 }
 

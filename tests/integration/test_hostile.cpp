@@ -1,5 +1,6 @@
 // Issue 12: the hostile corpus (tests/hostile/) against a real server. Each attack must get its
 // documented answer, and the server must stay healthy and keep serving others meanwhile.
+#include <cmath>
 #include <atomic>
 #include <thread>
 
@@ -88,12 +89,13 @@ TEST_F(Hostile, UserCodeCannotReachTheIntegratorsResources) {
   EXPECT_EQ(get("/api/brdfs/hostile_resource")->status, 404) << "a refused BRDF must not be stored";
 }
 
-// A server whose render targets may take 64 MiB in all.
+// A server with a small memory budget: after what its processes hold at start, room for small
+// views only.
 class MemoryBudget : public ServerTest {
  protected:
   static void SetUpTestSuite() {
     server_ = std::make_unique<ServerProcess>();
-    startError_ = server_->start({"--idle-timeout", "3", "--max-memory", "64"});
+    startError_ = server_->start({"--idle-timeout", "3", "--max-memory", "768"});
     if (!startError_.empty()) ADD_FAILURE() << "server did not start: " << startError_;
   }
 };
@@ -108,10 +110,10 @@ TEST_F(MemoryBudget, AViewPastTheBudgetIsRefusedWith507AndOthersGoOn) {
   ASSERT_EQ(frame->status, 200) << frame->body.substr(0, 300);
   auto health = get("/api/health");
   const nlohmann::json memory = bodyJson(health)["memory"];
-  EXPECT_EQ(memory.value("budget_bytes", 0ull), 64ull << 20) << memory.dump();
+  EXPECT_EQ(memory.value("budget_bytes", 0ull), 768ull << 20) << memory.dump();
   const uint64_t before = memory.value("render_targets_bytes", 0ull);
   EXPECT_GT(before, 0u);
-  EXPECT_LE(before, 64ull << 20);
+  EXPECT_LE(memory.value("used_bytes", 0ull), 768ull << 20);
 
   // 2048 x 2048 needs ~600 MiB of render targets: refused, and says why.
   auto big = put("/api/sessions/" + id + "/scene", R"({"render": {"width": 2048, "height": 2048}})");
@@ -119,7 +121,7 @@ TEST_F(MemoryBudget, AViewPastTheBudgetIsRefusedWith507AndOthersGoOn) {
   EXPECT_EQ(big->status, 507) << big->body.substr(0, 300);
   const nlohmann::json error = bodyJson(big);
   EXPECT_EQ(error.value("error", ""), "memory_budget") << big->body;
-  EXPECT_NE(error.value("message", "").find("--max-memory 64 MiB"), std::string::npos) << big->body;
+  EXPECT_NE(error.value("message", "").find("--max-memory 768 MiB"), std::string::npos) << big->body;
   // So is a one-shot render of that size, and a new session of it.
   auto oneShot = post("/api/render", R"({"scene": {"render": {"width": 2048, "height": 2048}}, "spp": 1})");
   ASSERT_TRUE(oneShot);
@@ -143,6 +145,84 @@ TEST_F(MemoryBudget, AViewPastTheBudgetIsRefusedWith507AndOthersGoOn) {
   // Deleting the session gives its memory back.
   EXPECT_EQ(del("/api/sessions/" + id)->status, 204);
   EXPECT_LT(bodyJson(get("/api/health"))["memory"].value("render_targets_bytes", 0ull), before);
+}
+
+// Everything the renderer holds is in one budget; a view that only fits once unused cached
+// programs are dropped gets them dropped, renders, and says so.
+class MemoryBudgetShrink : public ServerTest {
+ protected:
+  static void SetUpTestSuite() {
+    server_ = std::make_unique<ServerProcess>();
+    startError_ = server_->start({"--idle-timeout", "60", "--max-memory", "768"});
+    if (!startError_.empty()) ADD_FAILURE() << "server did not start: " << startError_;
+  }
+};
+
+TEST_F(MemoryBudgetShrink, AViewThatFitsOnlyWithoutUnusedProgramsDropsThemAndSaysSo) {
+  auto created = post("/api/sessions", furnaceScene("lambert", nlohmann::json::object(), 128, 4, 4).dump());
+  ASSERT_TRUE(created);
+  ASSERT_EQ(created->status, 201) << created->body;
+  const std::string id = bodyJson(created).value("id", "");
+  // Each BRDF builds a program; switching away leaves it cached and unused.
+  for (const char* brdf : {"lambert", "ggx", "phong", "ward", "oren_nayar", "blinn_phong", "cook_torrance",
+                           "ashikhmin_shirley", "lafortune", "disney_diffuse", "torrance_sparrow", "lambert"}) {
+    auto r = put("/api/sessions/" + id + "/scene", furnaceScene(brdf, nlohmann::json::object(), 128, 4, 4).dump());
+    ASSERT_TRUE(r && r->status == 200) << brdf << ": " << (r ? r->body : "no reply");
+    auto frame = get("/api/sessions/" + id + "/frame?min_spp=1&format=pfm");
+    ASSERT_TRUE(frame && frame->status == 200) << brdf;
+  }
+  const nlohmann::json before = bodyJson(get("/api/health"))["memory"];
+  const nlohmann::json renderer = before["renderer"];
+  const uint64_t budget = renderer.value("budget_bytes", 0ull);
+  uint64_t used = 0;
+  for (const char* use : {"process_bytes", "render_targets_bytes", "assets_bytes", "transfers_bytes", "programs_bytes",
+                          "compiles_bytes"})
+    used += renderer.value(use, 0ull);
+  const uint64_t targets128 = renderer.value("render_targets_bytes", 0ull);
+  const uint64_t programs = renderer.value("programs_bytes", 0ull);
+  ASSERT_GT(targets128, 0u) << before.dump();
+  ASSERT_GT(programs, 40ull << 20) << "11 programs at ~4 MiB each: " << before.dump();
+  ASSERT_LE(used, budget) << before.dump();
+  EXPECT_LE(before.value("used_bytes", 0ull), before.value("budget_bytes", 0ull)) << before.dump();
+
+  // A square view needing more than is left, but less than is left once the unused programs
+  // (all but the one in use, ~4 MiB) are gone. Targets grow with the pixels (same per-pixel
+  // cost up to 1024^2).
+  const double perPixel = double(targets128) / (128.0 * 128.0);
+  const double wanted = double(budget - (used - targets128)) + double(programs - (8ull << 20)) / 2;
+  const int side = int(std::sqrt(wanted / perPixel));
+  ASSERT_LE(side, 1024) << "the test assumes the per-pixel cost of views up to 1024^2";
+  ASSERT_GT(double(side) * side * perPixel, double(budget - (used - targets128)) + (2 << 20))
+      << "the view must not fit as things are";
+
+  auto resized = put("/api/sessions/" + id + "/scene", furnaceScene("lambert", nlohmann::json::object(), side, 4, 4).dump());
+  ASSERT_TRUE(resized);
+  ASSERT_EQ(resized->status, 200) << side << "^2: " << resized->body.substr(0, 400);
+  const nlohmann::json after = bodyJson(get("/api/health"))["memory"];
+  EXPECT_GE(after["renderer"].value("drops", 0ull), 1u) << after.dump();
+  EXPECT_LT(after["renderer"].value("programs_bytes", 0ull), programs) << after.dump();
+  const std::string lastDropped = after["renderer"].value("last_dropped", "");
+  EXPECT_NE(lastDropped.find("cached program"), std::string::npos) << lastDropped;
+  EXPECT_LE(after.value("used_bytes", 0ull), after.value("budget_bytes", 0ull)) << after.dump();
+  // The session says what was dropped for it, and renders at the new size.
+  auto session = get("/api/sessions/" + id);
+  ASSERT_TRUE(session && session->status == 200);
+  bool said = false;
+  for (const auto& w : bodyJson(session)["stats"].value("warnings", nlohmann::json::array()))
+    said = said || w.get<std::string>().find("memory: dropped") != std::string::npos;
+  EXPECT_TRUE(said) << session->body.substr(0, 600);
+  auto frame = get("/api/sessions/" + id + "/frame?min_spp=1&format=pfm");
+  ASSERT_TRUE(frame);
+  ASSERT_EQ(frame->status, 200);
+  Image image;
+  ASSERT_TRUE(decodeImage(frame->body, image));
+  EXPECT_EQ(image.width, side);
+  // A dropped program is rebuilt when used again.
+  auto back = put("/api/sessions/" + id + "/scene", furnaceScene("ggx", nlohmann::json::object(), 128, 4, 4).dump());
+  ASSERT_TRUE(back && back->status == 200) << (back ? back->body : "");
+  frame = get("/api/sessions/" + id + "/frame?min_spp=1&format=pfm");
+  ASSERT_TRUE(frame && frame->status == 200);
+  EXPECT_EQ(del("/api/sessions/" + id)->status, 204);
 }
 
 }  // namespace

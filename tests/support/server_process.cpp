@@ -10,6 +10,7 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <sstream>
 #include <thread>
 
@@ -52,6 +53,42 @@ ServerProcess::~ServerProcess() {
   }
 }
 
+uint64_t ServerProcess::treeResidentBytes() const {
+  if (pid_ <= 0) return 0;
+  // Every process's parent, then the sum over the server's descendants.
+  std::map<pid_t, pid_t> parent;
+  std::map<pid_t, uint64_t> resident;
+  std::error_code ec;
+  for (const auto& entry : std::filesystem::directory_iterator("/proc", ec)) {
+    const std::string name = entry.path().filename().string();
+    if (name.empty() || name.find_first_not_of("0123456789") != std::string::npos) continue;
+    const pid_t pid = std::atoi(name.c_str());
+    std::ifstream stat(entry.path() / "stat");
+    std::string line;
+    if (!std::getline(stat, line)) continue;
+    const size_t close = line.rfind(')');  // the command name may hold spaces and parentheses
+    if (close == std::string::npos) continue;
+    std::istringstream rest(line.substr(close + 2));
+    char state;
+    pid_t ppid = 0;
+    rest >> state >> ppid;
+    parent[pid] = ppid;
+    std::ifstream statm(entry.path() / "statm");
+    unsigned long long size = 0, pages = 0;
+    if (statm >> size >> pages) resident[pid] = pages * uint64_t(sysconf(_SC_PAGESIZE));
+  }
+  uint64_t total = 0;
+  for (const auto& [pid, bytes] : resident) {
+    for (pid_t p = pid; p > 1; p = parent.count(p) ? parent[p] : 0) {
+      if (p == pid_) {
+        total += bytes;
+        break;
+      }
+    }
+  }
+  return total;
+}
+
 std::string ServerProcess::logTail(size_t bytes) const {
   std::ifstream in(tmpDir_ + "/server.log", std::ios::binary);
   std::stringstream ss;
@@ -59,6 +96,15 @@ std::string ServerProcess::logTail(size_t bytes) const {
   std::string s = ss.str();
   return s.size() > bytes ? "..." + s.substr(s.size() - bytes) : s;
 }
+
+namespace {
+// A test is a client of a server that may close a connection while the test still writes (a
+// refused upload, a cut slow request): that is an EPIPE to check, not a signal that ends the run.
+const bool kIgnoreSigpipe = [] {
+  signal(SIGPIPE, SIG_IGN);
+  return true;
+}();
+}  // namespace
 
 std::string ServerProcess::start(const std::string& binary, const std::string& root,
                                  const std::vector<std::string>& extraArgs) {

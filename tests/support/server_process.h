@@ -35,6 +35,9 @@ class ServerProcess {
   int port() const { return port_; }
   pid_t pid() const { return pid_; }
   std::string logTail(size_t bytes = 6000) const;  // the server's stderr
+  // Resident memory of the server and of every process below it (render workers, the spare,
+  // compile workers), from /proc; 0 when it is not running.
+  uint64_t treeResidentBytes() const;
 
   std::unique_ptr<httplib::Client> client(int readTimeoutSec = 120) const;
 

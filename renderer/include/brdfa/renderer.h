@@ -37,11 +37,17 @@ struct RendererOptions {
   // GLSL is compiled in brdfa-compile-worker processes, each compile under this budget; past
   // it the compile fails with a CompileError naming the budget (issue 12).
   double compileSeconds = 5.0;
-  size_t compileMemoryMiB = 1024;
+  size_t compileMemoryMiB = 1024;  // RSS of one compile worker (MemoryUse::Compiles counts them at it)
   size_t compileWorkers = 0;  // at once; 0: one per core, at least 2
-  // Memory all render views' targets (G-buffer, accumulators, outputs) may take together; a
-  // view that would pass it fails with OverBudget. 0: no budget.
-  uint64_t maxViewMemoryBytes = 0;
+  // Memory the renderer may take in all (RendererCounters::memory): the device process as it
+  // starts (counted once more for each of spareProcesses, idle copies of it kept ready), render
+  // targets and G-buffers of every view, meshes, textures and environments on the device,
+  // uploads in flight to it, and compiled programs. What would pass it first drops unused
+  // cached programs and assets (they are rebuilt when used again), then fails with OverBudget
+  // naming what asked and what is left. 0: no budget.
+  uint64_t memoryBudgetBytes = 0;
+  std::string memoryBudgetLabel;  // names the budget in OverBudget messages (MemoryLedger)
+  unsigned spareProcesses = 0;
   // Isolation (issue 12): the device lives in a supervised brdfa-render-worker process. A
   // pipeline build past buildSeconds, one queue submission of a pass or frame read past
   // passSeconds (passes are split into submissions of ~50 ms; a program's first submission also
@@ -55,7 +61,7 @@ struct RendererOptions {
   // While one submission runs, every other view waits: this bounds the class's frame gaps.
   double passSeconds = 1.5;
   double checkSeconds = 120.0;
-  uint64_t workerMemoryBytes = 0;  // 0: maxViewMemoryBytes + 2 GiB (or no limit without one)
+  uint64_t workerMemoryBytes = 0;  // 0: memoryBudgetBytes + 2 GiB (or no limit without one)
 };
 
 struct DeviceInfo {
@@ -136,6 +142,21 @@ class RenderView {
   virtual Result<Frame> readFrame(bool linear) = 0;
 };
 
+// What the renderer's memory holds now, by use, against its budget (RendererOptions).
+struct MemoryUsage {
+  uint64_t budget = 0;         // RendererOptions::memoryBudgetBytes (0: none)
+  uint64_t fixed = 0;          // the device process and its idle compile workers at start (times 1 + spareProcesses)
+  uint64_t renderTargets = 0;  // every view's G-buffer, accumulators and outputs
+  uint64_t assets = 0;         // meshes, textures and environments on the device
+  uint64_t transfers = 0;      // uploads in flight to the device (decoded data, staging)
+  uint64_t programs = 0;       // built pipelines (an estimate each) and cached SPIR-V
+  uint64_t compiles = 0;       // what the GLSL compile workers may grow to, at their budget
+  uint64_t droppedBytes = 0;   // unused cached programs and assets dropped to fit, since start
+  uint64_t drops = 0;          // how many times that happened
+  std::string lastDropped;     // what the last drop gave back, for a person
+  uint64_t total() const { return fixed + renderTargets + assets + transfers + programs + compiles; }
+};
+
 // Work the renderer has done since it started: what tests and operators use to see that a
 // change did (or did not) compile anything.
 struct RendererCounters {
@@ -143,8 +164,7 @@ struct RendererCounters {
   uint64_t spirvCacheHits = 0;    // from memory
   uint64_t spirvDiskHits = 0;     // from the disk cache
   uint64_t pipelinesCreated = 0; // shading pipelines built (each costs a driver JIT)
-  uint64_t viewMemoryBytes = 0;   // render targets of all views now
-  uint64_t viewMemoryBudget = 0;  // RendererOptions::maxViewMemoryBytes (0: none)
+  MemoryUsage memory;             // now, against RendererOptions::memoryBudgetBytes
   uint64_t workerRestarts = 0;    // isolated renderers: render workers killed and replaced
   uint64_t quarantinedPrograms = 0;  // isolated renderers: programs refused since (see RendererOptions)
 };

@@ -27,7 +27,7 @@ struct ServerConfig {
   int maxAssets = 1000;                       // --max-assets: stored uploads (0 disables uploads)
   uint64_t maxAssetsBytes = 4ull << 30;       // --max-assets-bytes: all stored upload files together
   int compileTimeoutSec = 5;                  // --compile-timeout: one GLSL compile's wall clock
-  int compileMemoryMiB = 1024;                // --compile-memory: one GLSL compile's memory
+  int compileMemoryMiB = 0;                   // --compile-memory: one GLSL compile's memory; 0: --max-memory / 16, in 64..1024
   // The render worker's watchdog (issue 12, remote_renderer.h); --in-process turns it off.
   double buildBudgetSec = 10;                 // --build-budget: one pipeline build
   double passBudgetSec = 1.5;                 // --pass-budget: one queue submission of a pass

@@ -34,24 +34,29 @@ inline constexpr int kMaxOneShotSpp = 65536;
 inline constexpr int kMaxQueuedRenders = 8;  // waiting for a slot; 503 beyond
 inline constexpr int kMaxConcurrentUploadChecks = 2;  // uploads decoded by inspectAsset at once
 inline constexpr int kMaxQueuedUploadChecks = 8;      // waiting for one; 503 beyond
+inline constexpr std::chrono::seconds kUploadMemoryWait{30};  // for room in the uploads' share; then 503
 // Room for the multipart framing around a file of --max-upload-bytes (boundaries, part
 // headers, the `kind` field): the HTTP payload limit is max-upload-bytes plus this.
 inline constexpr size_t kMultipartOverhead = 1u << 20;
 
-// A counting semaphore whose waiters give up on timeout or shutdown.
+// A counting semaphore (of slots, or of bytes) whose waiters give up on timeout or shutdown.
 class RenderSlots {
  public:
-  RenderSlots(int count, int maxWaiting) : free_(count), maxWaiting_(maxWaiting) {}
-  // True when a slot was taken; the caller must release() it. False at once when
-  // `maxWaiting` callers already wait, else after `timeout` or on shutdown.
-  bool acquire(std::chrono::milliseconds timeout);
-  void release();
+  RenderSlots(uint64_t count, int maxWaiting) : capacity_(count), free_(count), maxWaiting_(maxWaiting) {}
+  // True when `units` were taken; the caller must release() them. False at once when
+  // `maxWaiting` callers already wait or `units` is more than the capacity, else after
+  // `timeout` or on shutdown.
+  bool acquire(std::chrono::milliseconds timeout, uint64_t units = 1);
+  void release(uint64_t units = 1);
   void shutdown();
+  uint64_t capacity() const { return capacity_; }
+  uint64_t taken() const;
 
  private:
-  std::mutex mutex_;
+  mutable std::mutex mutex_;
   std::condition_variable cv_;
-  int free_;
+  const uint64_t capacity_;
+  uint64_t free_;
   const int maxWaiting_;
   int waiting_ = 0;
   bool shutdown_ = false;
@@ -80,6 +85,10 @@ struct Service {
   std::shared_ptr<Renderer> renderer;  // declared before sessions: views die before the device
   BrdfLibrary library;
   RenderSlots uploadSlots{kMaxConcurrentUploadChecks, kMaxQueuedUploadChecks};
+  // Upload bodies in flight, in bytes: their share of --max-memory (memoryBudgetBytes / 8), the
+  // renderer has the rest.
+  std::unique_ptr<RenderSlots> uploadMemory;
+  uint64_t memoryBudgetBytes = 0;  // --max-memory, or half the RAM
   std::unique_ptr<AssetStore> assets;  // uploads and Blender worlds, registered with the renderer
   std::unique_ptr<SessionManager> sessions;
   std::unique_ptr<JobManager> jobs;  // batch tests; its workers stop in beginShutdown
