@@ -167,6 +167,10 @@ int runHttpBench(const std::string& serverBinary, const std::string& sourceDir) 
   // $BRDFA_BENCH_ROUNDS (default 1): rounds of all configurations, one after the other in each
   // round, so a machine's slow phase falls on all of them; each figure is the median over rounds.
   const char* baseline = std::getenv("BRDFA_BENCH_BASELINE_SERVER");
+  // Its own shaders and web files ($BRDFA_BENCH_BASELINE_ROOT, its checkout): this tree's may not
+  // match an older server's bindings.
+  const char* baselineRootEnv = std::getenv("BRDFA_BENCH_BASELINE_ROOT");
+  const std::string baselineRoot = baselineRootEnv ? baselineRootEnv : sourceDir;
   const char* roundsText = std::getenv("BRDFA_BENCH_ROUNDS");
   const int rounds = std::clamp(roundsText ? std::atoi(roundsText) : 1, 1, 50);
   std::vector<ServiceFigures> isolatedRuns, inProcessRuns, beforeRuns;
@@ -174,7 +178,7 @@ int runHttpBench(const std::string& serverBinary, const std::string& sourceDir) 
     ServiceFigures a, b, c;
     if (!measureService(serverBinary, sourceDir, {}, a) ||
         !measureService(serverBinary, sourceDir, {"--in-process"}, b) ||
-        (baseline && !measureService(baseline, sourceDir, {}, c)))
+        (baseline && !measureService(baseline, baselineRoot, {}, c)))
       return 1;
     isolatedRuns.push_back(a);
     inProcessRuns.push_back(b);
@@ -215,7 +219,8 @@ int runHttpBench(const std::string& serverBinary, const std::string& sourceDir) 
       std::vector<std::string> args = mode == 2 ? std::vector<std::string>{} : classArgs;
       if (mode == 1) args.push_back("--in-process");
       ClassFigures f;
-      if (!measureClass(mode == 2 ? baseline : serverBinary, sourceDir, args, 30, 20, f)) return 1;
+      if (!measureClass(mode == 2 ? baseline : serverBinary, mode == 2 ? baselineRoot : sourceDir, args, 30, 20, f))
+        return 1;
       perMode[mode].push_back(f);
     }
   }

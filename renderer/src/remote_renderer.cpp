@@ -57,6 +57,10 @@ struct Pending {
   uint64_t view = 0;
   bool done = false;   // reply holds the worker's answer
   bool lost = false;   // the worker was replaced before it answered
+  // Signalled (under the renderer's mutex) when done or lost turns true: only the one caller
+  // wakes for its reply (a notify_all per reply woke every waiting session, the watchdog
+  // included, and under a loaded CPU each wake-up costs a scheduling delay).
+  std::condition_variable answered;
   std::optional<Error> blame;  // set when this request caused the replacement
   wire::Message reply;
 };
@@ -256,7 +260,7 @@ class RemoteRenderer : public Renderer, public std::enable_shared_from_this<Remo
     // Whatever the worker is doing, nobody waits for it now (the destructor reaps it).
     if (worker_.pid > 0) ::kill(worker_.pid, SIGKILL);
     alive_ = false;
-    for (auto& [id, p] : pending_) p->lost = true;
+    loseAllPending();
     changed_.notify_all();
   }
 
@@ -293,7 +297,7 @@ class RemoteRenderer : public Renderer, public std::enable_shared_from_this<Remo
       std::shared_ptr<Pending> p;
       if (Result<void> sent = send(c, p); !sent) return sent.takeError();
       std::unique_lock lock(mutex_);
-      changed_.wait(lock, [&] { return p->done || p->lost; });
+      p->answered.wait(lock, [&] { return p->done || p->lost; });
       pending_.erase(p->id);
       if (p->blame) return *p->blame;
       if (stopping_) return makeError(ErrorCode::DeviceError, "the renderer is shutting down");
@@ -325,6 +329,14 @@ class RemoteRenderer : public Renderer, public std::enable_shared_from_this<Remo
     auto m = const_cast<RemoteRenderer*>(this)->request(std::move(c));
     if (!m) return {};
     return m->head.at("value").at(kind).get<std::vector<std::string>>();
+  }
+
+  // Every request in flight is answered "lost" (mutex_ held): its caller tries again, or stops.
+  void loseAllPending() {
+    for (auto& [id, p] : pending_) {
+      p->lost = true;
+      p->answered.notify_one();
+    }
   }
 
   // Registers `c` as pending and writes it to the live worker (waiting for one while a
@@ -441,7 +453,7 @@ class RemoteRenderer : public Renderer, public std::enable_shared_from_this<Remo
       if (it == pending_.end() || it->second->generation != generation) continue;
       it->second->reply = std::move(m);
       it->second->done = true;
-      changed_.notify_all();
+      it->second->answered.notify_one();
     }
     std::lock_guard lock(mutex_);
     if (generation == generation_) exited_ = true;
@@ -567,7 +579,7 @@ class RemoteRenderer : public Renderer, public std::enable_shared_from_this<Remo
       if (culprit->view && kind == "pass") failedViews_[culprit->view] = e;
       blamed = e.message;
     }
-    for (auto& [id, p] : pending_) p->lost = true;
+    loseAllPending();
     changed_.notify_all();
     lock.unlock();
     const int status = retire(dead, reader);
