@@ -343,6 +343,11 @@ Result<void> RenderViewImpl::setScene(const Scene& scene) {
                   std::memcmp(objects[i].params.mapped(), objects_[i].params.mapped(), objects[i].params.size()) == 0 &&
                   scene.objects[i].textures == scene_.objects[i].textures;
   }
+  // The same pipelines (parameters, textures or lighting changed): no driver compile comes with
+  // the next dispatch.
+  bool samePrograms = hasScene_ && objects.size() == objects_.size();
+  for (size_t i = 0; samePrograms && i < objects.size(); ++i)
+    samePrograms = objects[i].kernel->programHash == objects_[i].kernel->programHash;
   const bool geometryChanged = resized || !hasScene_ || !sameGeometry(scene_, scene);
   const bool lightingChanged = !hasScene_ || !sameLighting(scene_, scene);
   const bool restart = geometryChanged || !sameShading;
@@ -372,10 +377,16 @@ Result<void> RenderViewImpl::setScene(const Scene& scene) {
   // object pixels instead (see the shade kernel), which is cheaper.
   if (geometryChanged || lightingChanged) clearPending_ = true;
   // What a submission costs is relearned when what the shading runs changed (a parameter can
-  // be a loop count); a camera move keeps it.
+  // be a loop count), by a probe; a camera move keeps it. With the same pipelines the probe
+  // carries no driver compile (no warm-up), and the largest submission so far still bounds the
+  // growth after it: a slider's change costs a probe and the pass, not a ramp of submissions
+  // (which, each with its wake-ups, cost a loaded CPU ~10 ms a frame).
   if (!sameShading) {
-    msPerUnit_ = maxUnits_ = 0;
-    warmUp_ = true;
+    msPerUnit_ = 0;
+    if (!samePrograms) {
+      maxUnits_ = 0;
+      warmUp_ = true;
+    }
   }
   if (restart) {
     const uint64_t version = stats_.sceneVersion;
@@ -596,7 +607,7 @@ void RenderViewImpl::measureCoverage() {
   }
 }
 
-// A pass is split into submissions of about ctx().submissionTargetMs() of device time each, so
+// A pass is split into submissions of about ctx().submissionTargetMs(fence) of device time each, so
 // that between two of them the other views' submissions get the queue (VkContext hands it over
 // in arrival order): a heavy scene slows its own view, not the others. Each submission shades
 // a run of tiles: whole rows of 8x8 workgroups of an object's bounds, or part of one row.
@@ -632,7 +643,7 @@ Result<FrameStats> RenderViewImpl::renderPass() {
   auto groupUnits = [&](const ObjectState& o, size_t group, uint32_t n) {
     return (o.cover.empty() ? groupPixels : o.cover[group]) * n + 1.0;
   };
-  const double targetMs = r_->ctx().submissionTargetMs();
+  const double targetMs = r_->ctx().submissionTargetMs(cmd_.fence());
   uint32_t chunk = count;  // samples per sweep
   if (targetMs > 0 && msPerUnit_ > 0)
     chunk = static_cast<uint32_t>(
@@ -764,7 +775,7 @@ Result<FrameStats> RenderViewImpl::renderPass() {
     memoryBarrier(cb, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_ACCESS_SHADER_WRITE_BIT,
                   VK_PIPELINE_STAGE_HOST_BIT, VK_ACCESS_HOST_READ_BIT);
     double ms = 0;
-    BRDFA_TRY(cmd_.submitAndWait(&ms));
+    BRDFA_TRY(cmd_.submitAndWait(&ms, /*viewPass=*/true));
     clearPending_ = false;
     ++submissions;
     maxSubmissionMs = std::max(maxSubmissionMs, ms);

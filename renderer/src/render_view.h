@@ -87,7 +87,7 @@ class RenderViewImpl final : public RenderView {
   std::shared_ptr<const GpuEnvironment> env_;
   std::vector<ObjectState> objects_;
   bool clearPending_ = true;
-  // Splitting passes into submissions of about ctx().submissionTargetMs() (see renderPass): the
+  // Splitting passes into submissions of about ctx().submissionTargetMs(fence) (see renderPass): the
   // device cost of shading learned from this view's own submissions, in ms per cost unit (about
   // a pixel-sample; 0: not measured since the shading last changed), and the largest
   // submission measured so far in those units (growth is bounded by a multiple of it).

@@ -44,7 +44,7 @@ using nlohmann::json;
 // must be added there too (then update the size here). x86-64 Linux, the one target built.
 #if defined(__x86_64__) && defined(__linux__)
 static_assert(sizeof(FrameStats) == 184, "FrameStats changed: update toJson/statsFromJson");
-static_assert(sizeof(RendererOptions) == 256, "RendererOptions changed: update toJson/optionsFromJson");
+static_assert(sizeof(RendererOptions) == 264, "RendererOptions changed: update toJson/optionsFromJson");
 static_assert(sizeof(SceneObject) == 192, "SceneObject changed: update toJson(Scene)/sceneFromJson");
 #endif
 
@@ -203,7 +203,8 @@ json toJson(const RendererOptions& o) {
               {"spareProcesses", o.spareProcesses},
               {"buildSeconds", o.buildSeconds},
               {"passSeconds", o.passSeconds},       {"checkSeconds", o.checkSeconds},
-              {"submissionTargetMs", o.submissionTargetMs},     {"workerMemoryBytes", o.workerMemoryBytes}};
+              {"submissionTargetMs", o.submissionTargetMs},
+              {"soloSubmissionTargetMs", o.soloSubmissionTargetMs},     {"workerMemoryBytes", o.workerMemoryBytes}};
 }
 
 RendererOptions optionsFromJson(const json& j) {
@@ -225,6 +226,7 @@ RendererOptions optionsFromJson(const json& j) {
   j.at("passSeconds").get_to(o.passSeconds);
   j.at("checkSeconds").get_to(o.checkSeconds);
   j.at("submissionTargetMs").get_to(o.submissionTargetMs);
+  j.at("soloSubmissionTargetMs").get_to(o.soloSubmissionTargetMs);
   j.at("workerMemoryBytes").get_to(o.workerMemoryBytes);
   return o;
 }

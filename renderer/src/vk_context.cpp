@@ -149,6 +149,7 @@ Result<std::unique_ptr<VkContext>> VkContext::create(const RendererOptions& opti
                                                  ": needs Vulkan 1.1 subgroup arithmetic in compute shaders");
   ctx->subgroupSize_ = subgroup.subgroupSize;
   ctx->submissionTargetMs_ = std::max(0.0, options.submissionTargetMs);
+  ctx->soloSubmissionTargetMs_ = std::max(0.0, options.soloSubmissionTargetMs);
 
   const auto& p = ctx->properties_;
   ctx->info_.name = p.deviceName;
@@ -182,7 +183,28 @@ Result<uint32_t> VkContext::findMemoryType(uint32_t typeBits, VkMemoryPropertyFl
   return makeError(ErrorCode::DeviceError, "no suitable Vulkan memory type");
 }
 
-Result<void> VkContext::submitAndWait(VkCommandBuffer commands, VkFence fence, double* busyMs) {
+namespace {
+constexpr auto kOthersWindow = std::chrono::milliseconds(500);
+}  // namespace
+
+void VkContext::noteSubmission(VkFence fence) {
+  const auto now = std::chrono::steady_clock::now();
+  lastSubmission_[fence] = now;
+  if (lastSubmission_.size() > 64)
+    std::erase_if(lastSubmission_, [&](const auto& e) { return now - e.second > std::chrono::seconds(1); });
+}
+
+double VkContext::submissionTargetMs(VkFence mine) const {
+  if (submissionTargetMs_ <= 0 || soloSubmissionTargetMs_ <= submissionTargetMs_) return submissionTargetMs_;
+  const auto now = std::chrono::steady_clock::now();
+  std::lock_guard lock(queueMutex_);
+  const bool othersWaiting = !queueWaiters_.empty();
+  for (const auto& [fence, when] : lastSubmission_)
+    if (fence != mine && now - when < kOthersWindow) return submissionTargetMs_;
+  return othersWaiting ? submissionTargetMs_ : soloSubmissionTargetMs_;
+}
+
+Result<void> VkContext::submitAndWait(VkCommandBuffer commands, VkFence fence, double* busyMs, bool viewPass) {
   BRDFA_VK_TRY(vkResetFences(device_, 1, &fence));
   VkSubmitInfo si{VK_STRUCTURE_TYPE_SUBMIT_INFO};
   si.commandBufferCount = 1;
@@ -190,6 +212,7 @@ Result<void> VkContext::submitAndWait(VkCommandBuffer commands, VkFence fence, d
   // In flight from its place in the queue's order until its fence signals (device_activity.h).
   std::optional<device_activity::Scope> inFlight;
   std::unique_lock<std::mutex> lock(queueMutex_);
+  if (viewPass) noteSubmission(fence);
   if (queueBusy_ || !queueWaiters_.empty()) {
     std::condition_variable turn;
     queueWaiters_.push_back(&turn);
@@ -208,6 +231,7 @@ Result<void> VkContext::submitAndWait(VkCommandBuffer commands, VkFence fence, d
   }
   if (busyMs) *busyMs = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
   lock.lock();
+  if (viewPass) noteSubmission(fence);
   queueBusy_ = false;
   if (!queueWaiters_.empty()) queueWaiters_.front()->notify_one();
   lock.unlock();

@@ -4,7 +4,9 @@
 #include <vulkan/vulkan.h>
 
 #include <condition_variable>
+#include <chrono>
 #include <deque>
+#include <unordered_map>
 #include <cstdint>
 #include <memory>
 #include <mutex>
@@ -43,13 +45,18 @@ class VkContext {
   // after vkQueueSubmit, lavapipe's queue thread would still run submissions in order, but the
   // wait would include the others' work; lavapipe's timestamp queries read ~0 for long
   // dispatches.) Recording, on the host, still runs concurrently.
-  Result<void> submitAndWait(VkCommandBuffer commands, VkFence fence, double* busyMs = nullptr);
+  Result<void> submitAndWait(VkCommandBuffer commands, VkFence fence, double* busyMs = nullptr,
+                             bool viewPass = false);
 
-  // RendererOptions::submissionTargetMs: device time one submission of a pass aims at.
-  double submissionTargetMs() const { return submissionTargetMs_; }
+  // Device time one submission of a pass aims at (RendererOptions::submissionTargetMs), or,
+  // when no other view's pass (submissions with viewPass, told apart by their fence; `mine`
+  // is the asking view's) used the queue in the last half second and nothing waits for it,
+  // RendererOptions::soloSubmissionTargetMs (if larger).
+  double submissionTargetMs(VkFence mine) const;
 
  private:
   VkContext() = default;
+  void noteSubmission(VkFence fence);  // queueMutex_ held
   VkInstance instance_ = VK_NULL_HANDLE;
   VkPhysicalDevice physical_ = VK_NULL_HANDLE;
   VkDevice device_ = VK_NULL_HANDLE;
@@ -60,12 +67,15 @@ class VkContext {
   DeviceInfo info_;
   uint32_t subgroupSize_ = 1;
   double submissionTargetMs_ = 0;
+  double soloSubmissionTargetMs_ = 0;
   // The queue's turn (see submitAndWait): first come, first served, rather than a mutex held
   // through the wait, since a view that submits again right after its fence signals would
   // usually win a plain mutex back before a waiting thread wakes up, and starve the others.
   // Each waiter has its own condition variable and only the next one is woken: with 30
   // sessions, waking all of them at every hand-over cost 2 cores a fifth of the throughput.
-  std::mutex queueMutex_;
+  mutable std::mutex queueMutex_;
+  // When each fence's submission last held or waited for the queue (pruned past a second).
+  std::unordered_map<VkFence, std::chrono::steady_clock::time_point> lastSubmission_;
   std::deque<std::condition_variable*> queueWaiters_;  // in arrival order
   bool queueBusy_ = false;                             // a submission holds the turn
 };

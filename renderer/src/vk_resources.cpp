@@ -194,9 +194,9 @@ Result<VkCommandBuffer> CommandContext::begin() {
   return commands_;
 }
 
-Result<void> CommandContext::submitAndWait(double* busyMs) {
+Result<void> CommandContext::submitAndWait(double* busyMs, bool viewPass) {
   BRDFA_VK_TRY(vkEndCommandBuffer(commands_));
-  return ctx_->submitAndWait(commands_, fence_, busyMs);
+  return ctx_->submitAndWait(commands_, fence_, busyMs, viewPass);
 }
 
 void memoryBarrier(VkCommandBuffer cb, VkPipelineStageFlags src, VkAccessFlags srcAccess,

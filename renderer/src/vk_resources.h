@@ -101,7 +101,10 @@ class CommandContext {
   // Resets and begins recording.
   Result<VkCommandBuffer> begin();
   // Ends recording, submits and waits for completion; `busyMs`: see VkContext::submitAndWait.
-  Result<void> submitAndWait(double* busyMs = nullptr);
+  // `viewPass`: a view's pass, which the queue counts as that view's use of it (see
+  // VkContext::submissionTargetMs).
+  Result<void> submitAndWait(double* busyMs = nullptr, bool viewPass = false);
+  VkFence fence() const { return fence_; }  // identifies this context's submissions
   void reset();
 
  private:

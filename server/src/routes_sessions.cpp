@@ -32,6 +32,10 @@ nlohmann::json statsToJson(const FrameStats& s, const std::optional<Error>& rend
                      {"rel_error", nullptr},
                      {"nan_samples", s.nanSamples},
                      {"passes", s.passes},
+                     // The last pass: its wall time, and the queue submissions it was split into.
+                     {"last_pass_ms", s.lastPassMs},
+                     {"last_pass_submissions", s.submissions},
+                     {"last_pass_max_submission_ms", s.maxSubmissionMs},
                      // rel_error <= render.target_error (only with a target, from kMinSppForTarget spp).
                      {"converged", s.converged},
                      {"max_samples_reached", s.maxSamplesReached},

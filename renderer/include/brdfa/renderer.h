@@ -28,6 +28,11 @@ struct RendererOptions {
   // about this length, so a heavy scene cannot hold the shared queue for long (issue 12).
   // 0: one submission per pass.
   double submissionTargetMs = 50;
+  // The target while no other view has used the queue in the last half second: then nobody
+  // waits between submissions, and fewer of them save their wake-ups, which a loaded CPU makes
+  // costly (a slider change's frame took 137 ms instead of 109 under two busy loops on two
+  // cores). Kept far below the pass budget. 0: always submissionTargetMs.
+  double soloSubmissionTargetMs = 250;
   // SPIR-V cache on disk (empty: memory only). loadCache false only writes it (--no-cache-load).
   std::string cacheDir;
   bool loadCache = true;
