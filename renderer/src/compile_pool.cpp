@@ -157,7 +157,7 @@ Result<SpirvBinary> CompilePool::exchange(Worker& w, ShaderStage stage, const st
     if (ready < 0 && errno != EINTR) return fail(makeError(ErrorCode::Internal, "poll on the compile worker failed"));
     const double elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     if (elapsed > budget_.seconds) return fail(budgetError(budget_, "still compiling after " + secondsText(budget_.seconds)));
-    if (worker_process::residentBytes(w.pid) > uint64_t(budget_.memoryMiB) << 20)
+    if (worker_process::residentBytes(w.pid) > (uint64_t(budget_.memoryMiB) << 20) + worker_process::kSanitizerResidentBytes)
       return fail(budgetError(budget_, "more than " + std::to_string(budget_.memoryMiB) + " MiB in use"));
   }
   std::string frame;

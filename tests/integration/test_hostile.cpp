@@ -15,7 +15,6 @@ class Hostile : public ServerTest {
   static void SetUpTestSuite() {
     server_ = std::make_unique<ServerProcess>();
     startError_ = server_->start({"--idle-timeout", "3", "--compile-timeout", "2", "--compile-memory", "512"});
-    if (!startError_.empty()) ADD_FAILURE() << "server did not start: " << startError_;
   }
 };
 
@@ -96,7 +95,6 @@ class MemoryBudget : public ServerTest {
   static void SetUpTestSuite() {
     server_ = std::make_unique<ServerProcess>();
     startError_ = server_->start({"--idle-timeout", "3", "--max-memory", "768"});
-    if (!startError_.empty()) ADD_FAILURE() << "server did not start: " << startError_;
   }
 };
 
@@ -154,7 +152,6 @@ class MemoryBudgetShrink : public ServerTest {
   static void SetUpTestSuite() {
     server_ = std::make_unique<ServerProcess>();
     startError_ = server_->start({"--idle-timeout", "60", "--max-memory", "768"});
-    if (!startError_.empty()) ADD_FAILURE() << "server did not start: " << startError_;
   }
 };
 
