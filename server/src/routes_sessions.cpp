@@ -74,9 +74,10 @@ bool requireScene(Session& session, httplib::Response& res) {
 // Validates `json` and applies it under the held update lock; answers with the full scene.
 void applySceneJson(Service& service, Session& session, std::unique_lock<std::mutex>& lock, const nlohmann::json& json,
                     httplib::Response& res) {
-  Result<Scene> scene = sceneFromJson(json, service.resolver());
+  std::vector<std::string> notes;
+  Result<Scene> scene = sceneFromJson(json, service.resolver(), &notes);
   if (!scene) return sendError(res, scene.error());
-  nlohmann::json full = sceneToJson(scene.value());
+  nlohmann::json full = sceneToJson(scene.value(), notes);
   Result<void> applied = session.applyScene(lock, scene.value(), full);
   if (!applied) return sendError(res, applied.error());
   sendJson(res, full);
@@ -212,14 +213,15 @@ void registerSessionRoutes(httplib::Server& server, Service& service) {
       body = std::move(*parsed);
     }
     // Validated before the session exists, so a bad scene leaves nothing behind.
-    Result<Scene> scene = sceneFromJson(body, service.resolver());
+    std::vector<std::string> notes;
+    Result<Scene> scene = sceneFromJson(body, service.resolver(), &notes);
     if (!scene) return sendError(res, scene.error());
     SessionManager::Created created = service.sessions->create();
     if (created.full)
       return sendError(res, 429, "too_many_sessions",
                        "at most " + std::to_string(service.sessions->maxSessions()) + " sessions; delete one first");
     if (!created.session) return sendError(res, *created.error);
-    nlohmann::json full = sceneToJson(scene.value());
+    nlohmann::json full = sceneToJson(scene.value(), notes);
     {
       auto lock = created.session->beginSceneUpdate(false);
       Result<void> applied = created.session->applyScene(lock, scene.value(), full);

@@ -230,7 +230,31 @@ Result<std::vector<TextureBinding>> readTextures(const json& j, const std::strin
   return out;
 }
 
-Result<SceneObject> parseObject(const json& j, const std::string& prefix, const SceneResolver& r) {
+// `value` of parameter `p` clamped into its range; `note` says what changed (empty if nothing).
+Vec3 clampParam(const BrdfParam& p, Vec3 value, const std::string& field, const std::string& brdfName,
+                std::string& note) {
+  auto text = [](float v) {
+    char s[32];
+    std::snprintf(s, sizeof s, "%g", v);
+    return std::string(s);
+  };
+  const float lo = p.type == ParamType::Float ? p.min : 0.0f, hi = p.type == ParamType::Float ? p.max : 1.0f;
+  const int n = p.type == ParamType::Color ? 3 : p.type == ParamType::Float ? 1 : 0;
+  Vec3 clamped = value;
+  std::string was, now;
+  for (int c = 0; c < n; ++c) {
+    clamped[c] = std::min(std::max(value[c], lo), hi);
+    was += (c ? ", " : "") + text(value[c]);
+    now += (c ? ", " : "") + text(clamped[c]);
+  }
+  if (clamped == value) return value;
+  if (n == 3) was = "[" + was + "]", now = "[" + now + "]";
+  note = field + ": " + was + " is outside " + brdfName + "'s range " + text(lo) + ".." + text(hi) + "; clamped to " + now;
+  return clamped;
+}
+
+Result<SceneObject> parseObject(const json& j, const std::string& prefix, const SceneResolver& r,
+                                std::vector<std::string>* notes) {
   SceneObject obj;
   BRDFA_CHECK(checkObject(j, prefix));
   BRDFA_CHECK(checkKeys(j, prefix, {"mesh", "brdf", "params", "translate", "rotate", "scale", "textures"}));
@@ -292,7 +316,9 @@ Result<SceneObject> parseObject(const json& j, const std::string& prefix, const 
       }
       Result<Vec3> value = readParamValue(*p, it.value(), field);
       if (!value) return value.takeError();
-      obj.params[p->name] = value.value();
+      std::string note;
+      obj.params[p->name] = clampParam(*p, value.value(), field, brdfName, note);
+      if (!note.empty() && notes) notes->push_back(std::move(note));
     }
   }
   return obj;
@@ -347,10 +373,10 @@ Result<Vec3> paramValueFromJson(const BrdfParam& param, const json& value, const
   return readParamValue(param, value, field);
 }
 
-Result<Scene> sceneFromJson(const json& j, const SceneResolver& r) {
+Result<Scene> sceneFromJson(const json& j, const SceneResolver& r, std::vector<std::string>* notes) {
   Scene scene;
   if (!j.is_object()) return invalid("scene", std::string("a scene is a JSON object, got ") + typeName(j));
-  BRDFA_CHECK(checkKeys(j, "", {"camera", "environment", "objects", "render"}));
+  BRDFA_CHECK(checkKeys(j, "", {"camera", "environment", "objects", "render", "notes"}));
   // Shapes and ranges of every section first, then names: a request with a typo and an unknown
   // name gets the 400 for the typo.
   if (auto it = j.find("camera"); it != j.end()) BRDFA_CHECK(parseCamera(*it, scene.camera));
@@ -363,19 +389,19 @@ Result<Scene> sceneFromJson(const json& j, const SceneResolver& r) {
     if (it->size() > static_cast<size_t>(kMaxObjects))
       return invalid("objects", "at most " + std::to_string(kMaxObjects) + " objects");
     for (size_t i = 0; i < it->size(); ++i) {
-      Result<SceneObject> obj = parseObject((*it)[i], "objects[" + std::to_string(i) + "]", r);
+      Result<SceneObject> obj = parseObject((*it)[i], "objects[" + std::to_string(i) + "]", r, notes);
       if (!obj) return obj.takeError();
       scene.objects.push_back(std::move(obj.value()));
     }
   } else {
-    Result<SceneObject> obj = parseObject(json::object(), "objects[0]", r);
+    Result<SceneObject> obj = parseObject(json::object(), "objects[0]", r, notes);
     if (!obj) return obj.takeError();
     scene.objects.push_back(std::move(obj.value()));
   }
   return scene;
 }
 
-json sceneToJson(const Scene& s) {
+json sceneToJson(const Scene& s, const std::vector<std::string>& notes) {
   json objects = json::array();
   for (const SceneObject& o : s.objects) {
     json params = json::object();
@@ -395,7 +421,7 @@ json sceneToJson(const Scene& s) {
                        {"scale", vec3ToJson(o.scale)},
                        {"textures", textures}});
   }
-  return json{
+  json out = json{
       {"camera",
        {{"position", vec3ToJson(s.camera.position)},
         {"yaw", floatForJson(s.camera.yaw)},
@@ -418,6 +444,8 @@ json sceneToJson(const Scene& s) {
         {"exposure", floatForJson(s.render.exposure)},
         {"tonemap", toneMapName(s.render.toneMap)}}},
   };
+  if (!notes.empty()) out["notes"] = notes;
+  return out;
 }
 
 }  // namespace brdfa::server

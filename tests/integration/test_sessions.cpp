@@ -441,5 +441,55 @@ TEST_F(Sessions, NanProducingBrdfIsCountedAndNeverReachesPixels) {
   for (float v : img.rgba) ASSERT_TRUE(std::isfinite(v));
 }
 
+// Issue 13 item 6: values carried from one BRDF to another by name (the UI keeps them) that
+// fall outside the new BRDF's range are clamped, the scene says so, and nothing renders NaN.
+TEST_F(Sessions, ParameterValuesOutsideTheBrdfsRangeAreClampedAndTheSceneSaysSo) {
+  // Disney's roughness 0 carried into ggx (minimum 0.001), and a colour past 0..1.
+  json scene = furnaceScene("ggx", {{"roughness", 0.0}, {"F0", {1.5, -0.25, 0.5}}}, 32, 16);
+  auto created = post("/api/sessions", scene.dump());
+  ASSERT_TRUE(created);
+  ASSERT_EQ(created->status, 201) << created->body;
+  const std::string id = bodyJson(created).value("id", "");
+  const json answered = bodyJson(created)["scene"];
+  const json& params = answered["objects"][0]["params"];
+  EXPECT_FLOAT_EQ(params.value("roughness", -1.0f), 0.001f) << answered.dump();
+  EXPECT_EQ(params["F0"], json({1.0, 0.0, 0.5})) << answered.dump();
+  ASSERT_TRUE(answered.contains("notes")) << answered.dump();
+  const std::string notes = answered["notes"].dump();
+  EXPECT_NE(notes.find("objects[0].params.roughness: 0 is outside ggx's range 0.001..1; clamped to 0.001"),
+            std::string::npos)
+      << notes;
+  EXPECT_NE(notes.find("objects[0].params.F0"), std::string::npos) << notes;
+
+  // The scene's GET says so too, and a GET scene PUT back is accepted (its notes ignored, and
+  // gone: nothing is out of range any more).
+  auto got = get("/api/sessions/" + id + "/scene");
+  ASSERT_TRUE(got && got->status == 200);
+  const json fetched = bodyJson(got);
+  EXPECT_EQ(fetched["notes"], answered["notes"]);
+  auto back = put("/api/sessions/" + id + "/scene", fetched.dump());
+  ASSERT_TRUE(back);
+  ASSERT_EQ(back->status, 200) << back->body;
+  EXPECT_FALSE(bodyJson(back).contains("notes")) << back->body;
+
+  // Rendered with the clamped values: no NaN sample, finite pixels.
+  auto frame = get("/api/sessions/" + id + "/frame?min_spp=16&format=pfm");
+  ASSERT_TRUE(frame && frame->status == 200);
+  Image img;
+  ASSERT_TRUE(decodeImage(frame->body, img));
+  for (float v : img.rgba) ASSERT_TRUE(std::isfinite(v));
+  auto stats = get("/api/sessions/" + id + "/stats");
+  ASSERT_TRUE(stats && stats->status == 200);
+  EXPECT_EQ(bodyJson(stats).value("nan_samples", uint64_t(1)), 0u) << stats->body;
+
+  // A PATCH that switches the BRDF and carries the value again is clamped again.
+  auto patched = patch("/api/sessions/" + id + "/scene",
+                       json{{"objects", {{{"brdf", "ggx"}, {"params", {{"roughness", -3.0}}}}}}}.dump());
+  ASSERT_TRUE(patched && patched->status == 200) << (patched ? patched->body : "");
+  EXPECT_FLOAT_EQ(bodyJson(patched)["objects"][0]["params"].value("roughness", -1.0f), 0.001f);
+  EXPECT_TRUE(bodyJson(patched).contains("notes"));
+  del("/api/sessions/" + id);
+}
+
 }  // namespace
 }  // namespace brdfa::itest

@@ -34,14 +34,20 @@ inline constexpr const char* kSamplingChoices = "\"cosine\", \"uniform\", \"brdf
 
 // Parses and validates. Every object's params are filled in completely (explicit value or the
 // BRDF's default), so sceneToJson(sceneFromJson(j)) lists them all and parses back to an equal
-// Scene.
-Result<Scene> sceneFromJson(const nlohmann::json& json, const SceneResolver& resolver);
+// Scene. A parameter value outside its BRDF's range (a float's min..max, a color's 0..1) is
+// clamped into it, and `notes` (optional) gets a line saying so: values carried over from
+// another BRDF by name (Disney's roughness 0 into ggx, whose minimum is 0.001) render as the
+// sliders show them, never as NaN. A top-level "notes" key is accepted and ignored, so a GET
+// scene can be PUT back.
+Result<Scene> sceneFromJson(const nlohmann::json& json, const SceneResolver& resolver,
+                            std::vector<std::string>* notes = nullptr);
 
 // One parameter value with the rules of `objects[i].params` (right type, finite, bools as
 // true/false/0/1); errors are InvalidArgument naming `field`.
 Result<Vec3> paramValueFromJson(const BrdfParam& param, const nlohmann::json& value, const std::string& field);
 
-// The full scene with every field present.
-nlohmann::json sceneToJson(const Scene& scene);
+// The full scene with every field present, plus "notes" (what sceneFromJson clamped) when
+// `notes` is not empty.
+nlohmann::json sceneToJson(const Scene& scene, const std::vector<std::string>& notes = {});
 
 }  // namespace brdfa::server

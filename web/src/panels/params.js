@@ -161,6 +161,15 @@ export function mountParams(el) {
     for (const [name, c] of controls) if (document.activeElement !== c.input) showValue(c, params[name]);
   });
 
+  // What the server clamped (a value carried over from another BRDF by name, outside this
+  // one's range): said beside the sliders, which show the value it renders with.
+  const notes = el.querySelector('.params-notes');
+  on('scene', ({ scene }) => {
+    const lines = scene?.notes || [];
+    notes.textContent = lines.join('\n');
+    notes.hidden = !lines.length;
+  });
+
   el.querySelector('.params-reset').addEventListener('click', () => {
     const params = {};
     for (const [name, c] of controls) { params[name] = c.decl.default; showValue(c, c.decl.default); }
