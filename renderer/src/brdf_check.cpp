@@ -238,22 +238,74 @@ Result<void> RendererImpl::runCheckKernel(const BrdfDefinition& brdf, const char
   return {};
 }
 
+namespace {
+// The check kernel's grid (check.comp.glsl): polar angles of V and L, azimuths 45 degrees apart.
+constexpr double kCheckThetaDeg[10] = {0.0, 15.0, 30.0, 45.0, 60.0, 75.0, 85.0, 89.0, 89.9, 90.0};
+
+std::string number(double v) {
+  char s[32];
+  std::snprintf(s, sizeof s, "%.4g", v);
+  return s;
+}
+
+std::string direction(const char* name, double thetaDeg, double phiDeg) {
+  return std::string(name) + " (theta " + number(thetaDeg) + " deg, phi " + number(phiDeg) + " deg)";
+}
+
+// One entry of checkSettings, for a person: "defaults" or "roughness = 0.001 (others default)".
+std::string describeSetting(const std::map<std::string, Vec3>& setting, const BrdfDefinition& brdf) {
+  if (setting.empty()) return "all parameters at their defaults";
+  std::string out;
+  for (const auto& [name, v] : setting) {
+    const BrdfParam* p = brdf.findParam(name);
+    const bool color = p && p->type == ParamType::Color;
+    out += (out.empty() ? "" : ", ") + name + " = " +
+           (color ? "[" + number(v[0]) + ", " + number(v[1]) + ", " + number(v[2]) + "]" : number(v[0]));
+  }
+  return out + " (others at their defaults)";
+}
+}  // namespace
+
 Result<BrdfCheckReport> RendererImpl::checkBrdf(const BrdfDefinition& brdf) {
   const auto t0 = std::chrono::steady_clock::now();
   BrdfCheckReport report;
-  auto ran = runCheckKernel(brdf, "check.comp.glsl", kViews, kViews * 2, checkSettings(brdf), [&](const float* out) {
+  const std::vector<std::map<std::string, Vec3>> settings = checkSettings(brdf);
+  size_t setting = 0;  // consume() is called once per setting, in order
+  auto ran = runCheckKernel(brdf, "check.comp.glsl", kViews, kViews * 4, settings, [&](const float* out) {
+    const std::string where = describeSetting(settings[setting++], brdf);
     for (uint32_t v = 0; v < kViews; ++v) {
-      const float* counts = out + 8 * v;
+      const float* counts = out + 16 * v;
       const float* albedo = counts + 4;
+      const float* worst = counts + 8;
+      const float* first = counts + 12;
+      const std::string view = direction("V", kCheckThetaDeg[v % 10], 45.0 * (v / 10));
+      auto light = [](float at) { return direction("L", kCheckThetaDeg[int(at) / 8], 45.0 * (int(at) % 8)); };
       report.nanCount += static_cast<uint64_t>(counts[0]);
       report.infCount += static_cast<uint64_t>(counts[1]);
       report.negativeCount += static_cast<uint64_t>(counts[2]);
       report.evaluations += static_cast<uint64_t>(counts[3]);
-      if (std::isfinite(albedo[0])) report.maxAlbedo = std::max(report.maxAlbedo, double(albedo[0]));
+      report.leftOut += static_cast<uint64_t>(albedo[3]);
+      if (std::isfinite(albedo[0]) && albedo[0] > report.maxAlbedo) {
+        report.maxAlbedo = albedo[0];
+        report.worstAlbedo = number(albedo[0]) + " +- " + number(albedo[1]) + " (standard error) at " + view +
+                             ", " + where;
+      }
       // Only a significant excess counts: a near-delta lobe gives a wild estimate with a
       // standard error to match.
       if (albedo[0] - 3.0 * albedo[1] > 1.01) ++report.albedoAboveOne;
-      report.maxReciprocityError = std::max(report.maxReciprocityError, double(albedo[2]));
+      if (albedo[2] > report.maxReciprocityError) {
+        report.maxReciprocityError = albedo[2];
+        report.worstReciprocity = number(albedo[2]) + " at " + view + ", " + light(worst[0]) + ", " + where +
+                                  ": f(L,V) = " + number(worst[1]) + ", f(V,L) = " + number(worst[2]);
+      }
+      if (first[3] > 0 && report.firstBadValue.empty()) {
+        const char* kind = first[3] == 1 ? "NaN" : first[3] == 2 ? "Inf" : "a negative value";
+        const std::string at = worst[3] >= 100 ? "an albedo sample (cosine-distributed L no. " +
+                                                     std::to_string(int(worst[3]) - 100) + ")"
+                                               : light(worst[3]);
+        report.firstBadValue = std::string(kind) + " (" + number(first[0]) + ", " + number(first[1]) + ", " +
+                               number(first[2]) + ") at " + view + ", " + at + ", " + where;
+      }
     }
   });
   if (!ran) return ran.takeError();

@@ -21,7 +21,8 @@ NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(MemoryUsage, budget, fixed, renderTargets, as
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(RendererCounters, glslCompiles, spirvCacheHits, spirvDiskHits, pipelinesCreated,
                                    memory, workerRestarts, quarantinedPrograms)
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(BrdfCheckReport, evaluations, nanCount, infCount, negativeCount, maxAlbedo,
-                                   albedoAboveOne, maxReciprocityError, ms)
+                                   albedoAboveOne, maxReciprocityError, leftOut, worstReciprocity, firstBadValue,
+                                   worstAlbedo, ms)
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(SamplerCheckConfig, normalLabel, normal, tangent, bitangent, view, viewDeg,
                                    viewAzimuthDeg)
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(SamplerConfigResult, config, rejected, maxValueMismatch, maxCellZ, albedoZ,

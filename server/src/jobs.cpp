@@ -262,11 +262,23 @@ json JobManager::runItem(const JobItem& item) {
                      {"albedo_above_one", r.albedoAboveOne},
                      {"max_reciprocity_error", r.maxReciprocityError},
                      {"evaluations", r.evaluations},
+                     {"left_out", r.leftOut},
+                     {"worst",
+                      {{"reciprocity", r.worstReciprocity},
+                       {"bad_value", r.firstBadValue},
+                       {"albedo", r.worstAlbedo}}},
                      {"ms", r.ms}};
     ok = r.ok();
     if (r.nanCount) log.push_back("check: " + std::to_string(r.nanCount) + " NaN values");
     if (r.infCount) log.push_back("check: " + std::to_string(r.infCount) + " infinite values");
     if (r.negativeCount) log.push_back("check: " + std::to_string(r.negativeCount) + " negative values");
+    // Where: each finding's worst (or first) case, so a failure can be reproduced.
+    if (!r.firstBadValue.empty()) log.push_back("check: first bad value: " + r.firstBadValue);
+    if (!r.worstReciprocity.empty()) log.push_back("check: worst reciprocity error " + r.worstReciprocity);
+    if (!r.worstAlbedo.empty()) log.push_back("check: largest albedo " + r.worstAlbedo);
+    if (r.leftOut)
+      log.push_back("check: " + std::to_string(r.leftOut) +
+                    " (L, V) pairs with L = -V on the horizon left out (measure zero; the half vector is 0/0)");
   } else {
     // The check could not run (Unsupported for a legacy render() file, rendered but never
     // analysed): reported, and not held against the BRDF unless it found a compile error.

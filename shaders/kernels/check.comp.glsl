@@ -7,9 +7,16 @@
 //  - estimates the directional albedo E(V) = integral f cos dL with 4096 cosine-weighted R2
 //    samples (estimator f * pi) and its standard error, so the host flags only significant
 //    excess over 1 (a grid cannot resolve near-delta lobes; their error bars say so).
-// Output per view: brdfa_accum[2v] = (nan, inf, negative, evaluations),
-//                  brdfa_accum[2v+1] = (albedo, its standard error, reciprocity error, 0),
-// albedo and error of the channel with the largest albedo.
+// L = -V (both on the horizon, opposite azimuths) is left out: the half vector is 0/0 there, a
+// configuration of measure zero that the integrator never meets (it is counted apart).
+// Output per view (4 vec4):
+//   [4v]   = (nan, inf, negative, evaluations)
+//   [4v+1] = (albedo, its standard error, reciprocity error, pairs left out)
+//   [4v+2] = (grid index t*8+k of the worst reciprocity, its f(L,V), its f(V,L), where the
+//             first bad value was: grid index, or 100 + albedo sample index; -1: none)
+//   [4v+3] = (the first bad value, rgb; its kind: 1 NaN, 2 Inf, 3 negative)
+// albedo and error of the channel with the largest albedo; reciprocity values of the channel
+// with the largest relative error.
 layout(local_size_x = 8, local_size_y = 1, local_size_z = 1) in;
 
 const int BRDFA_THETAS = 10;
@@ -24,10 +31,15 @@ vec3 brdfa_checkDirection(float thetaDeg, float phi) {
   return vec3(s * cos(phi), s * sin(phi), z);
 }
 
-void brdfa_tally(vec3 f, inout vec3 counts) {
-  if (any(isnan(f))) counts.x += 1.0;
-  else if (any(isinf(f))) counts.y += 1.0;
-  else if (any(lessThan(f, vec3(0.0)))) counts.z += 1.0;
+// Counts a bad value, and keeps the first one's place, value and kind.
+void brdfa_tally(vec3 f, float where, inout vec3 counts, inout float firstAt, inout vec4 first) {
+  float kind = any(isnan(f)) ? 1.0 : any(isinf(f)) ? 2.0 : any(lessThan(f, vec3(0.0))) ? 3.0 : 0.0;
+  if (kind == 0.0) return;
+  counts[int(kind) - 1] += 1.0;
+  if (firstAt < 0.0) {
+    firstAt = where;
+    first = vec4(f, kind);
+  }
 }
 
 bool brdfa_finite(vec3 f) { return !any(isnan(f)) && !any(isinf(f)); }
@@ -40,20 +52,34 @@ void main() {
   texCoord = vec2(0.5);
 
   vec3 counts = vec3(0.0);
-  float evaluations = 0.0;
-  float reciprocity = 0.0;
+  float evaluations = 0.0, leftOut = 0.0;
+  float reciprocity = 0.0, worstAt = -1.0, worstA = 0.0, worstB = 0.0;
+  float firstAt = -1.0;
+  vec4 first = vec4(0.0);
   for (int t = 0; t < BRDFA_THETAS; ++t) {
     for (int k = 0; k < 8; ++k) {
       vec3 L = brdfa_checkDirection(BRDFA_THETA_DEG[t], radians(45.0) * float(k));
+      // Measure zero, never met by the integrator: L = -V on the horizon (H = 0/0).
+      if (dot(L, V) < -0.99999) {
+        leftOut += 1.0;
+        continue;
+      }
+      float at = float(t * 8 + k);
       vec3 a = BRDF(L, V, N, X, Y);
       vec3 b = BRDF(V, L, N, X, Y);
-      brdfa_tally(a, counts);
-      brdfa_tally(b, counts);
+      brdfa_tally(a, at, counts, firstAt, first);
+      brdfa_tally(b, at, counts, firstAt, first);
       evaluations += 2.0;
       if (brdfa_finite(a) && brdfa_finite(b)) {
         vec3 scale = max(max(abs(a), abs(b)), vec3(1e-6));  // guard: both ~0 is no error
         vec3 rel = abs(a - b) / scale;
-        reciprocity = max(reciprocity, max(rel.x, max(rel.y, rel.z)));
+        int c = rel.x >= rel.y && rel.x >= rel.z ? 0 : (rel.y >= rel.z ? 1 : 2);
+        if (rel[c] > reciprocity) {
+          reciprocity = rel[c];
+          worstAt = at;
+          worstA = a[c];
+          worstB = b[c];
+        }
       }
     }
   }
@@ -63,7 +89,7 @@ void main() {
     float cosOverPdf;
     vec3 L = brdfa_sampleCosineHemisphere(brdfa_sample2D(uvec2(0u), i), cosOverPdf);
     vec3 f = BRDF(L, V, N, X, Y);
-    brdfa_tally(f, counts);
+    brdfa_tally(f, 100.0 + float(i), counts, firstAt, first);
     evaluations += 1.0;
     if (!brdfa_finite(f)) continue;
     vec3 w = f * cosOverPdf;
@@ -74,6 +100,8 @@ void main() {
   vec3 mean = sum / n;
   vec3 stderr = sqrt(max(sumSq / n - mean * mean, vec3(0.0)) / (n - 1.0));
   int c = mean.x >= mean.y && mean.x >= mean.z ? 0 : (mean.y >= mean.z ? 1 : 2);
-  brdfa_accum[2u * v] = vec4(counts, evaluations);
-  brdfa_accum[2u * v + 1u] = vec4(mean[c], stderr[c], reciprocity, 0.0);
+  brdfa_accum[4u * v] = vec4(counts, evaluations);
+  brdfa_accum[4u * v + 1u] = vec4(mean[c], stderr[c], reciprocity, leftOut);
+  brdfa_accum[4u * v + 2u] = vec4(worstAt, worstA, worstB, firstAt);
+  brdfa_accum[4u * v + 3u] = first;
 }

@@ -186,6 +186,12 @@ struct BrdfCheckReport {
   double maxAlbedo = 0;             // largest directional albedo over view angles and settings
   uint64_t albedoAboveOne = 0;      // (view angle, setting) pairs with albedo > 1.01
   double maxReciprocityError = 0;   // max |f(L,V) - f(V,L)| / max(|f(L,V)|, |f(V,L)|, 1e-6)
+  uint64_t leftOut = 0;             // (L, V) pairs of measure zero not evaluated: L = -V on the horizon
+  // Where the worst case of each finding is, for a person: the parameter setting, the view and
+  // light directions (polar angle from N, azimuth from X) and the values. Empty when none.
+  std::string worstReciprocity;     // where maxReciprocityError was found (when > 0)
+  std::string firstBadValue;        // the first NaN, Inf or negative value met
+  std::string worstAlbedo;          // where maxAlbedo was found, with its standard error
   double ms = 0;                    // wall time of the check
   bool ok() const { return nanCount == 0 && infCount == 0 && negativeCount == 0; }
 };
