@@ -60,7 +60,7 @@ void main() {
     for (int k = 0; k < 8; ++k) {
       vec3 L = brdfa_checkDirection(BRDFA_THETA_DEG[t], radians(45.0) * float(k));
       // Measure zero, never met by the integrator: L = -V on the horizon (H = 0/0).
-      if (dot(L, V) < -0.99999) {
+      if (length(L + V) < 1e-4) {
         leftOut += 1.0;
         continue;
       }

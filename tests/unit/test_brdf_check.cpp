@@ -77,16 +77,33 @@ TEST_F(BrdfCheck, CatchesNaN) {
   EXPECT_NE(r.firstBadValue.find("all parameters at their defaults"), std::string::npos) << r.firstBadValue;
 }
 
-// Issue 13: Schlick's factor on the half vector, reciprocal by construction, used to fail with
-// NaN where L = -V on the horizon (H = 0/0), a configuration of measure zero that the
-// integrator never meets: it is left out, and counted apart.
-TEST_F(BrdfCheck, HalfVectorTermIsCleanWithTheMeasureZeroPairLeftOut) {
-  BrdfCheckReport r = check(withBody("return vec3(k * pow(1.0 - dot(normalize(L + V), L), 5.0));"));
-  EXPECT_EQ(r.nanCount, 0u) << r.firstBadValue;
-  EXPECT_EQ(r.infCount, 0u);
-  EXPECT_LT(r.maxReciprocityError, 1e-4) << r.worstReciprocity;
-  EXPECT_EQ(r.leftOut, 3u * 4u);
-  EXPECT_TRUE(r.ok());
+// Issue 13: Schlick's factor on the half vector, reciprocal by construction. L = -V on the
+// horizon (H = 0/0), a configuration of measure zero that the integrator never meets, is left
+// out and counted apart. The issue's 18 NaN were not there, though: the report names them at
+// L = V exactly, where dot(H, L) rounds above 1 and pow() of the negative base is NaN (GLSL
+// leaves pow(x < 0) undefined). The integrator meets L within ~1e-3 rad of V too, so those are
+// real (rare) NaN samples; the file's fix is max(0, ...), which checks clean.
+TEST_F(BrdfCheck, HalfVectorTermNaNIsNamedAtLEqualsVAndTheGuardedTermIsClean) {
+  BrdfCheckReport raw = check(withBody("return vec3(k * pow(1.0 - dot(normalize(L + V), L), 5.0));"));
+  EXPECT_EQ(raw.leftOut, 3u * 4u);
+  ASSERT_GT(raw.nanCount, 0u);
+  // "NaN (...) at V (theta T deg, phi P deg), L (theta T deg, phi P deg), ...": the same direction.
+  const std::string& at = raw.firstBadValue;
+  const size_t v = at.find("at V "), l = at.find(", L ");
+  ASSERT_NE(v, std::string::npos) << at;
+  ASSERT_NE(l, std::string::npos) << at;
+  const std::string vDir = at.substr(v + 5, at.find(')', v) - (v + 5));
+  const std::string lDir = at.substr(l + 4, at.find(')', l) - (l + 4));
+  EXPECT_EQ(vDir, lDir) << at;
+
+  BrdfCheckReport guarded = check(withBody("return vec3(k * pow(max(0.0, 1.0 - dot(normalize(L + V), L)), 5.0));"));
+  EXPECT_EQ(guarded.nanCount, 0u) << guarded.firstBadValue;
+  EXPECT_EQ(guarded.infCount, 0u);
+  // Worst next to the pair left out (V at 89.9 degrees, L on the horizon opposite): L + V is
+  // 2e-3 long there, and its normalisation loses float digits to the cancellation (2.7e-4).
+  EXPECT_LT(guarded.maxReciprocityError, 1e-3) << guarded.worstReciprocity;
+  EXPECT_EQ(guarded.leftOut, 3u * 4u);
+  EXPECT_TRUE(guarded.ok());
 }
 
 TEST_F(BrdfCheck, CatchesInfinityAtGrazingAngles) {
