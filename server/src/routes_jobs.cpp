@@ -29,9 +29,10 @@ void registerJobRoutes(httplib::Server& server, Service& service) {
 
     std::vector<JobItem> items;
     if (all) {
-      for (const auto& entry : service.library.list()) items.push_back(JobItem{entry->name, entry->definition, {}});
+      for (const auto& entry : service.library.list())
+        if (!isScratchBrdf(entry->name)) items.push_back(JobItem{entry->name, entry->definition, {}});
       for (BrokenBrdf& b : service.library.listBroken())
-        items.push_back(JobItem{b.name, nullptr, std::move(b.error)});
+        if (!isScratchBrdf(b.name)) items.push_back(JobItem{b.name, nullptr, std::move(b.error)});
       std::sort(items.begin(), items.end(), [](const JobItem& a, const JobItem& b) { return a.name < b.name; });
     } else {
       if (!namesIt->is_array())

@@ -583,7 +583,10 @@ TEST_F(LibraryApi, BatchJobOverAllRunsWhileTheStreamKeepsDelivering) {
   // A scene that never converges, so the stream has new frames all along.
   auto r = put("/api/sessions/default/scene", furnaceScene("lambert", json::object(), 32, 1 << 20, 1).dump());
   ASSERT_TRUE(r && r->status == 200) << (r ? r->body : "");
-  size_t brdfCount = bodyJson(get("/api/brdfs")).size();
+  // A tab's scratch copy is listed but is no library entry: "all" leaves it out.
+  r = put("/api/brdfs/scratch-itest", readRepoFile("shaders/brdfs/lambert.brdf"), "text/plain");
+  ASSERT_TRUE(r && r->status == 201) << (r ? r->body : "");
+  size_t brdfCount = bodyJson(get("/api/brdfs")).size() - 1;
 
   std::atomic<int> parts{0};
   std::atomic<bool> stopStream{false};
@@ -643,6 +646,8 @@ TEST_F(LibraryApi, BatchJobOverAllRunsWhileTheStreamKeepsDelivering) {
         << res.dump();
   }
   EXPECT_EQ(names.size(), brdfCount);
+  EXPECT_EQ(names.count("scratch-itest"), 0u);
+  del("/api/brdfs/scratch-itest");
   std::fprintf(stderr, "batch over %zu BRDFs: %d stream parts arrived meanwhile\n", brdfCount, partsDuringJob);
   EXPECT_GE(partsDuringJob, 2) << "the stream stalled while the job ran";
 }

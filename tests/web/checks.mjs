@@ -295,7 +295,8 @@ export const checks = [
     assert.ok(Math.abs((await http(env, 'GET', '/api/brdfs/ui_saved/presets/rough07')).roughness - 0.7) < 0.002);
 
     const decl = saved.params.find((p) => p.name === 'roughness');
-    await page.click('#params .param:has(input[name="roughness"]) .param-reset');
+    // Found by its accessible name, as a screen reader announces it (the glyph alone is none).
+    await page.getByRole('button', { name: 'reset roughness to its default', exact: true }).click();
     await until('roughness back to its default', async () =>
       Math.abs((await http(env, 'GET', `/api/sessions/${sid}/scene`)).objects[0].params.roughness - decl.default) < 1e-6);
     await page.selectOption('#params .preset-list', 'rough07');

@@ -18,6 +18,10 @@
 
 namespace brdfa::server {
 
+// The web UI's per-tab working copies are user BRDFs named scratch-<session>: a batch test of
+// "all" leaves them out (they are someone's unsaved edit, not the library).
+inline bool isScratchBrdf(std::string_view name) { return name.substr(0, 8) == "scratch-"; }
+
 struct BrdfEntry {
   std::string name;
   std::string source;  // the .brdf text as submitted

@@ -61,6 +61,8 @@ export function mountParams(el) {
       reset.className = 'param-reset';
       reset.textContent = '↺';
       reset.title = `reset ${decl.name} to its default`;
+      // The glyph alone is no name for a screen reader: say what it resets.
+      reset.setAttribute('aria-label', reset.title);
       row.append(name, input, readout, reset);
       list.append(row);
       const c = { decl, input, readout };
