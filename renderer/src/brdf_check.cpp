@@ -266,6 +266,25 @@ std::string describeSetting(const std::map<std::string, Vec3>& setting, const Br
 }
 }  // namespace
 
+namespace {
+// The three properties a file may claim, judged against BrdfCheckReport's limits.
+std::vector<ClaimVerdict> claimVerdicts(const BrdfCheckReport& r, const BrdfClaims& claims) {
+  std::vector<ClaimVerdict> out(3);
+  out[0] = {"reciprocity", claims.reciprocity, r.maxReciprocityError <= BrdfCheckReport::kReciprocityLimit,
+            "largest relative error " + number(r.maxReciprocityError) + " (limit " +
+                number(BrdfCheckReport::kReciprocityLimit) + ")" +
+                (r.worstReciprocity.empty() ? "" : ", " + r.worstReciprocity)};
+  out[1] = {"energy-conservation", claims.energyConservation, r.albedoAboveOne == 0,
+            std::to_string(r.albedoAboveOne) + " (view, setting) pairs with albedo above 1 by more than " +
+                number(BrdfCheckReport::kAlbedoSigmas) + " standard errors; largest albedo " +
+                (r.worstAlbedo.empty() ? "0" : r.worstAlbedo)};
+  out[2] = {"non-negativity", claims.nonNegativity, r.negativeCount == 0,
+            std::to_string(r.negativeCount) + " negative values" +
+                (r.negativeCount && !r.firstBadValue.empty() ? "; first bad value: " + r.firstBadValue : "")};
+  return out;
+}
+}  // namespace
+
 Result<BrdfCheckReport> RendererImpl::checkBrdf(const BrdfDefinition& brdf) {
   const auto t0 = std::chrono::steady_clock::now();
   BrdfCheckReport report;
@@ -287,12 +306,14 @@ Result<BrdfCheckReport> RendererImpl::checkBrdf(const BrdfDefinition& brdf) {
       report.leftOut += static_cast<uint64_t>(albedo[3]);
       if (std::isfinite(albedo[0]) && albedo[0] > report.maxAlbedo) {
         report.maxAlbedo = albedo[0];
+        report.maxAlbedoStdError = albedo[1];
         report.worstAlbedo = number(albedo[0]) + " +- " + number(albedo[1]) + " (standard error) at " + view +
                              ", " + where;
       }
-      // Only a significant excess counts: a near-delta lobe gives a wild estimate with a
-      // standard error to match.
-      if (albedo[0] - 3.0 * albedo[1] > 1.01) ++report.albedoAboveOne;
+      // Only a significant excess counts: the estimate's own error bar says how far it may be
+      // off (BrdfCheckReport's limits).
+      if (albedo[0] - BrdfCheckReport::kAlbedoSigmas * albedo[1] > 1.0 + BrdfCheckReport::kAlbedoSlack)
+        ++report.albedoAboveOne;
       if (albedo[2] > report.maxReciprocityError) {
         report.maxReciprocityError = albedo[2];
         report.worstReciprocity = number(albedo[2]) + " at " + view + ", " + light(worst[0]) + ", " + where +
@@ -300,15 +321,14 @@ Result<BrdfCheckReport> RendererImpl::checkBrdf(const BrdfDefinition& brdf) {
       }
       if (first[3] > 0 && report.firstBadValue.empty()) {
         const char* kind = first[3] == 1 ? "NaN" : first[3] == 2 ? "Inf" : "a negative value";
-        const std::string at = worst[3] >= 100 ? "an albedo sample (cosine-distributed L no. " +
-                                                     std::to_string(int(worst[3]) - 100) + ")"
-                                               : light(worst[3]);
+        const std::string at = worst[3] >= 100 ? "an albedo sample (f cos / pdf of a drawn L)" : light(worst[3]);
         report.firstBadValue = std::string(kind) + " (" + number(first[0]) + ", " + number(first[1]) + ", " +
                                number(first[2]) + ") at " + view + ", " + at + ", " + where;
       }
     }
   });
   if (!ran) return ran.takeError();
+  report.claims = claimVerdicts(report, brdf.claims);
   report.ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
   return report;
 }

@@ -257,6 +257,7 @@ class Parser {
   void beginSection(std::string_view name, int line);
   void endSection(std::string_view name, int line);
   void handleOutsideLine(std::string_view text, int line);
+  void handleClaimsLine(std::string_view comment, int line);
   void handleGlslLine(std::string_view raw, int line);
   void handleParamLine(std::string_view text, int line);
   bool parseFloatParam(const std::vector<std::string_view>& t, BrdfParam& p, int line);
@@ -337,6 +338,31 @@ void Parser::handleDirective(const std::vector<std::string_view>& tokens, int li
     beginSection(tokens[1], line);
   else
     endSection(tokens[1], line);
+}
+
+// `# claims: reciprocity, energy-conservation, non-negativity` (BrdfClaims). Other comments
+// pass unread.
+void Parser::handleClaimsLine(std::string_view comment, int line) {
+  if (!comment.starts_with("claims:")) return;
+  if (def_.claims.declared) {
+    error(line, "a second claims line (the first is line " + std::to_string(def_.claims.line) + ")");
+    return;
+  }
+  def_.claims.declared = true;
+  def_.claims.line = line;
+  std::string list(comment.substr(7));
+  for (char& c : list)
+    if (c == ',') c = ' ';
+  for (std::string_view name : tokenize(list)) {
+    if (name == "reciprocity")
+      def_.claims.reciprocity = true;
+    else if (name == "energy-conservation")
+      def_.claims.energyConservation = true;
+    else if (name == "non-negativity")
+      def_.claims.nonNegativity = true;
+    else if (name != "none")
+      error(line, "unknown claim " + quoted(name) + " (known: reciprocity, energy-conservation, non-negativity, none)");
+  }
 }
 
 void Parser::handleOutsideLine(std::string_view text, int line) {
@@ -528,7 +554,10 @@ Result<BrdfDefinition> Parser::run(std::string_view text) {
       }
     }
     switch (section_) {
-      case Section::None: handleOutsideLine(stripComment(raw), line); break;
+      case Section::None:
+        if (t.starts_with("#")) handleClaimsLine(trim(t.substr(1)), line);
+        handleOutsideLine(stripComment(raw), line);
+        break;
       case Section::Parameters: handleParamLine(raw, line); break;
       case Section::Shader:
       case Section::Sample: handleGlslLine(raw, line); break;

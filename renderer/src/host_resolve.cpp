@@ -45,8 +45,6 @@ const SrgbTables& tables() {
   return t;
 }
 
-float luminance(float r, float g, float b) { return 0.2126f * r + 0.7152f * g + 0.0722f * b; }
-
 // Same bound as BRDFA_TONE_MAX in tonemap.glsl: every curve has reached 1 far below it, and
 // it keeps Inf / Inf (NaN) out of the rational curves.
 constexpr float kToneMax = 1.0e6f;
@@ -98,6 +96,8 @@ void resolvePixels(const HostResolveInput& in, uint8_t* rgba8, float* rgba32f, E
 }
 
 }  // namespace
+
+float luminance(float r, float g, float b) { return 0.2126f * r + 0.7152f * g + 0.0722f * b; }
 
 float toneMapValue(float e, ToneMap toneMap) {
   if (!(e > 0.0f)) return 0.0f;  // also NaN

@@ -40,4 +40,7 @@ uint8_t linearToSrgb8(float linear);
 // rel_error from the sums: sqrt(mean variance) / mean luminance; negative when undefined.
 double relativeError(const ErrorSums& sums);
 
+// Rec. 709 luminance of linear RGB: the quantity the error estimates are measured in.
+float luminance(float r, float g, float b);
+
 }  // namespace brdfa

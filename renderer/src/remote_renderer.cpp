@@ -202,6 +202,29 @@ class RemoteRenderer : public Renderer, public std::enable_shared_from_this<Remo
     return wire::samplerReportFromJson(m->head.at("value"));
   }
 
+  // Analyses run under the pass budget per submission (the worker's rule for ops not named
+  // check*): they are interactive, and a BRDF that loops forever must not hold the queue.
+  Result<std::vector<Vec3>> evaluateBrdf(const BrdfDefinition& brdf, const std::vector<ParamSetting>& settings,
+                                         const std::vector<DirectionPair>& pairs) override {
+    Call c = brdfCall("analysisValues", brdf, Budget::Pass);
+    c.head["settings"] = settings;
+    c.head["pairs"] = wire::toJson(pairs);
+    auto m = request(std::move(c));
+    if (!m) return m.takeError();
+    return m->head.at("value").get<std::vector<Vec3>>();
+  }
+
+  Result<std::vector<AlbedoEstimate>> estimateAlbedo(const BrdfDefinition& brdf, const std::vector<ParamSetting>& settings,
+                                                     const std::vector<Vec3>& views, uint32_t samplesPerView) override {
+    Call c = brdfCall("analysisAlbedo", brdf, Budget::Pass);
+    c.head["settings"] = settings;
+    c.head["views"] = views;
+    c.head["samples"] = samplesPerView;
+    auto m = request(std::move(c));
+    if (!m) return m.takeError();
+    return wire::albedoFromJson(m->head.at("value"));
+  }
+
   Result<EnvironmentSamplerReport> checkEnvironmentSampler(const std::string& environment) override {
     Call c;
     c.head = json{{"op", "checkEnvironmentSampler"}, {"environment", environment}};

@@ -584,6 +584,8 @@ void RenderViewImpl::setRelError(const ErrorSums& sums) {
     stats_.relError.reset();
   stats_.relErrorSpp = stats_.spp;
   stats_.relErrorElapsedMs = stats_.elapsedMs;
+  stats_.errorPixels = sums.pixels > 0 ? static_cast<uint64_t>(sums.pixels) : 0;
+  stats_.errorMeanLuminance = sums.pixels > 0 ? sums.luminance / sums.pixels : 0.0;
   sinceErrorMs_ = 0;
 }
 

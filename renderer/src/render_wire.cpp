@@ -9,6 +9,8 @@ namespace brdfa {
 // file sees them: both ends of the wire are built from it.
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(Diagnostic, line, column, severity, message)
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(BrdfParam, name, type, min, max, defaultValue, line)
+NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(BrdfClaims, declared, reciprocity, energyConservation, nonNegativity, line)
+NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(ClaimVerdict, name, claimed, holds, measured)
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(Camera, position, yaw, pitch, fov)
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(EnvironmentSettings, name, intensity, rotation, visible)
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(RenderSettings, width, height, samplesPerFrame, maxSamples, sampling, targetError,
@@ -21,8 +23,10 @@ NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(MemoryUsage, budget, fixed, renderTargets, as
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(RendererCounters, glslCompiles, spirvCacheHits, spirvDiskHits, pipelinesCreated,
                                    memory, workerRestarts, quarantinedPrograms)
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(BrdfCheckReport, evaluations, nanCount, infCount, negativeCount, maxAlbedo,
-                                   albedoAboveOne, maxReciprocityError, leftOut, worstReciprocity, firstBadValue,
-                                   worstAlbedo, ms)
+                                   maxAlbedoStdError, albedoAboveOne, maxReciprocityError, leftOut, worstReciprocity,
+                                   firstBadValue, worstAlbedo, claims, ms)
+NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(DirectionPair, light, view)
+NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(AlbedoEstimate, mean, stdError, samples, nonFinite)
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(SamplerCheckConfig, normalLabel, normal, tangent, bitangent, view, viewDeg,
                                    viewAzimuthDeg)
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(SamplerConfigResult, config, rejected, maxValueMismatch, maxCellZ, albedoZ,
@@ -44,7 +48,7 @@ using nlohmann::json;
 // The hand-written conversions below list every field; a field added to one of these types
 // must be added there too (then update the size here). x86-64 Linux, the one target built.
 #if defined(__x86_64__) && defined(__linux__)
-static_assert(sizeof(FrameStats) == 184, "FrameStats changed: update toJson/statsFromJson");
+static_assert(sizeof(FrameStats) == 200, "FrameStats changed: update toJson/statsFromJson");
 static_assert(sizeof(RendererOptions) == 264, "RendererOptions changed: update toJson/optionsFromJson");
 static_assert(sizeof(SceneObject) == 192, "SceneObject changed: update toJson(Scene)/sceneFromJson");
 #endif
@@ -77,7 +81,7 @@ json toJson(const BrdfDefinition& brdf) {
   return json{{"format", brdf.format},           {"params", brdf.params},
               {"shader", brdf.shader},           {"shaderFirstLine", brdf.shaderFirstLine},
               {"sampleShader", brdf.sampleShader}, {"sampleFirstLine", brdf.sampleFirstLine},
-              {"warnings", brdf.warnings}};
+              {"warnings", brdf.warnings},       {"claims", brdf.claims}};
 }
 
 BrdfDefinition brdfFromJson(const json& j) {
@@ -89,6 +93,7 @@ BrdfDefinition brdfFromJson(const json& j) {
   j.at("sampleShader").get_to(b.sampleShader);
   j.at("sampleFirstLine").get_to(b.sampleFirstLine);
   j.at("warnings").get_to(b.warnings);
+  j.at("claims").get_to(b.claims);
   return b;
 }
 
@@ -158,6 +163,8 @@ json toJson(const FrameStats& f) {
               {"relError", f.relError ? json(*f.relError) : json()},
               {"relErrorSpp", f.relErrorSpp},
               {"relErrorElapsedMs", f.relErrorElapsedMs},
+              {"errorPixels", f.errorPixels},
+              {"errorMeanLuminance", f.errorMeanLuminance},
               {"vertices", f.vertices},
               {"triangles", f.triangles},
               {"programBytes", f.programBytes},
@@ -180,6 +187,8 @@ FrameStats statsFromJson(const json& j) {
   if (!j.at("relError").is_null()) f.relError = j.at("relError").get<double>();
   j.at("relErrorSpp").get_to(f.relErrorSpp);
   j.at("relErrorElapsedMs").get_to(f.relErrorElapsedMs);
+  j.at("errorPixels").get_to(f.errorPixels);
+  j.at("errorMeanLuminance").get_to(f.errorMeanLuminance);
   j.at("vertices").get_to(f.vertices);
   j.at("triangles").get_to(f.triangles);
   j.at("programBytes").get_to(f.programBytes);
@@ -238,6 +247,10 @@ json toJson(const CompileInfo& info) { return info; }
 CompileInfo compileInfoFromJson(const json& j) { return j.get<CompileInfo>(); }
 json toJson(const RendererCounters& counters) { return counters; }
 RendererCounters countersFromJson(const json& j) { return j.get<RendererCounters>(); }
+json toJson(const std::vector<DirectionPair>& pairs) { return pairs; }
+std::vector<DirectionPair> pairsFromJson(const json& j) { return j.get<std::vector<DirectionPair>>(); }
+json toJson(const std::vector<AlbedoEstimate>& albedo) { return albedo; }
+std::vector<AlbedoEstimate> albedoFromJson(const json& j) { return j.get<std::vector<AlbedoEstimate>>(); }
 json toJson(const BrdfCheckReport& report) { return report; }
 BrdfCheckReport brdfReportFromJson(const json& j) { return j.get<BrdfCheckReport>(); }
 json toJson(const SamplerCheckReport& report) { return report; }

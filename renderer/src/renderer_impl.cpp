@@ -619,8 +619,10 @@ AssembledProgram RendererImpl::assembleCheckProgram(const BrdfDefinition& brdf, 
   const BrdfFeatures features = detectFeatures(brdf);
   if (features.textures) spec.defines.push_back("BRDFA_TEXTURES");
   if (features.samplerPdf) spec.defines.push_back("BRDFA_HAS_PDF");  // check_sampler: chi-square test
+  if (brdf.hasSampler()) spec.defines.push_back("BRDFA_HAS_SAMPLER");  // lib/albedo.glsl: importance sampling
   spec.userChunks.push_back(sources_.get("lib/brdf_inputs.glsl"));
-  for (const char* piece : {"lib/bindings.glsl", "lib/random.glsl", "lib/sampling.glsl", "lib/environment_sampling.glsl"})
+  for (const char* piece : {"lib/bindings.glsl", "lib/random.glsl", "lib/sampling.glsl", "lib/environment_sampling.glsl",
+                            "lib/albedo.glsl"})
     spec.commonChunks.push_back(sources_.get(piece));
   spec.integrator = sources_.get(std::string("kernels/") + kernel);
   return assembleProgram(spec);

@@ -46,6 +46,10 @@ class RendererImpl final : public Renderer, public std::enable_shared_from_this<
   Result<BrdfCheckReport> checkBrdf(const BrdfDefinition& brdf) override;
   Result<SamplerCheckReport> checkSampler(const BrdfDefinition& brdf) override;
   Result<EnvironmentSamplerReport> checkEnvironmentSampler(const std::string& environment) override;
+  Result<std::vector<Vec3>> evaluateBrdf(const BrdfDefinition& brdf, const std::vector<ParamSetting>& settings,
+                                         const std::vector<DirectionPair>& pairs) override;
+  Result<std::vector<AlbedoEstimate>> estimateAlbedo(const BrdfDefinition& brdf, const std::vector<ParamSetting>& settings,
+                                                     const std::vector<Vec3>& views, uint32_t samplesPerView) override;
   Result<int> preloadFromCache(const BrdfDefinition& brdf) override;
   RendererCounters counters() const override;
   // Render-target memory of views against the renderer's memory budget: replaces a view's

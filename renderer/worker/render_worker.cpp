@@ -189,6 +189,14 @@ class Worker {
       reply(id, map(r.checkBrdf(wire::brdfFromJson(head.at("brdf"))), [](auto& v) { return wire::toJson(v); }));
     } else if (op == "checkSampler") {
       reply(id, map(r.checkSampler(wire::brdfFromJson(head.at("brdf"))), [](auto& v) { return wire::toJson(v); }));
+    } else if (op == "analysisValues") {
+      reply(id, map(r.evaluateBrdf(wire::brdfFromJson(head.at("brdf")), head.at("settings").get<std::vector<ParamSetting>>(),
+                                   wire::pairsFromJson(head.at("pairs"))),
+                    [](auto& v) { return json(v); }));
+    } else if (op == "analysisAlbedo") {
+      reply(id, map(r.estimateAlbedo(wire::brdfFromJson(head.at("brdf")), head.at("settings").get<std::vector<ParamSetting>>(),
+                                     head.at("views").get<std::vector<Vec3>>(), head.at("samples").get<uint32_t>()),
+                    [](auto& v) { return wire::toJson(v); }));
     } else if (op == "checkEnvironmentSampler") {
       reply(id, map(r.checkEnvironmentSampler(head.at("environment").get<std::string>()),
                     [](auto& v) { return wire::toJson(v); }));

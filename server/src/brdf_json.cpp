@@ -38,6 +38,17 @@ nlohmann::json brdfEntryToJson(const BrdfEntry& entry, bool withSource) {
                      {"format", brdfFormatName(entry.definition->format)},
                      {"builtin", entry.builtin},
                      {"params", paramsToJson(entry.definition->params)}};
+  // What the file claims (its `# claims:` line), checked by the batch test; null: no line.
+  const BrdfClaims& c = entry.definition->claims;
+  if (c.declared) {
+    nlohmann::json claims = nlohmann::json::array();
+    if (c.reciprocity) claims.push_back("reciprocity");
+    if (c.energyConservation) claims.push_back("energy-conservation");
+    if (c.nonNegativity) claims.push_back("non-negativity");
+    out["claims"] = claims;
+  } else {
+    out["claims"] = nullptr;
+  }
   if (withSource) out["source"] = entry.source;
   return out;
 }

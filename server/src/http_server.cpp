@@ -47,6 +47,8 @@ Result<std::unique_ptr<HttpServer>> HttpServer::create(const ServerConfig& confi
   registerBrdfRoutes(http, s);
   registerSessionRoutes(http, s);
   registerRenderRoutes(http, s);
+  registerAnalysisRoutes(http, s);
+  registerDifferenceRoutes(http, s);
   registerJobRoutes(http, s);
   registerAssetRoutes(http, s);
   registerStaticRoutes(http, s);

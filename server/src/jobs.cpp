@@ -23,6 +23,14 @@ void appendError(json& log, const Error& e) {
 
 int errorCount(const Error& e) { return e.diagnostics.empty() ? 1 : static_cast<int>(e.diagnostics.size()); }
 
+// Each property a file may claim: claimed or not, whether it holds, and the measurement.
+json claimsJson(const std::vector<ClaimVerdict>& claims) {
+  json out = json::array();
+  for (const ClaimVerdict& c : claims)
+    out.push_back({{"name", c.name}, {"claimed", c.claimed}, {"holds", c.holds}, {"measured", c.measured}});
+  return out;
+}
+
 }  // namespace
 
 bool JobManager::Job::over() const {
@@ -259,6 +267,7 @@ json JobManager::runItem(const JobItem& item) {
                      {"inf", r.infCount},
                      {"negative", r.negativeCount},
                      {"max_albedo", r.maxAlbedo},
+                     {"max_albedo_std_error", r.maxAlbedoStdError},
                      {"albedo_above_one", r.albedoAboveOne},
                      {"max_reciprocity_error", r.maxReciprocityError},
                      {"evaluations", r.evaluations},
@@ -267,8 +276,14 @@ json JobManager::runItem(const JobItem& item) {
                       {{"reciprocity", r.worstReciprocity},
                        {"bad_value", r.firstBadValue},
                        {"albedo", r.worstAlbedo}}},
+                     {"claims", claimsJson(r.claims)},
+                     {"claims_declared", item.definition->claims.declared},
                      {"ms", r.ms}};
     ok = r.ok();
+    for (const ClaimVerdict& c : r.claims)
+      if (c.claimed && !c.holds) log.push_back("check: claim '" + c.name + "' violated: " + c.measured);
+    if (!item.definition->claims.declared)
+      log.push_back("check: the file declares no claims (a '# claims: ...' line): properties are reported, not failed");
     if (r.nanCount) log.push_back("check: " + std::to_string(r.nanCount) + " NaN values");
     if (r.infCount) log.push_back("check: " + std::to_string(r.infCount) + " infinite values");
     if (r.negativeCount) log.push_back("check: " + std::to_string(r.negativeCount) + " negative values");

@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "brdfa_server/service.h"
+#include "brdfa_server/session.h"
 
 namespace brdfa::server {
 
@@ -17,6 +18,8 @@ void registerSystemRoutes(httplib::Server& server, Service& service);  // health
 void registerBrdfRoutes(httplib::Server& server, Service& service);
 void registerSessionRoutes(httplib::Server& server, Service& service);
 void registerRenderRoutes(httplib::Server& server, Service& service);
+void registerAnalysisRoutes(httplib::Server& server, Service& service);  // plots of BRDFs
+void registerDifferenceRoutes(httplib::Server& server, Service& service);  // side by side: A - B
 void registerJobRoutes(httplib::Server& server, Service& service);  // batch tests
 void registerAssetRoutes(httplib::Server& server, Service& service);  // uploads, listing
 void registerStaticRoutes(httplib::Server& server, Service& service);  // last: catch-all GET
@@ -29,6 +32,13 @@ std::optional<nlohmann::json> readJsonBody(const httplib::Request& req, httplib:
 // and returns nullopt.
 std::optional<std::string> readBrdfTextBody(const httplib::Request& req, httplib::Response& res,
                                             const httplib::ContentReader& reader);
+
+// The session named by the path's first match (running a pending default scene first), or
+// answers 404 and returns null.
+std::shared_ptr<Session> sessionOr404(Service& service, const httplib::Request& req, httplib::Response& res,
+                                      bool initialize = true);
+// True when the session has a scene; else answers 409 no_scene.
+bool requireScene(Session& session, httplib::Response& res);
 
 // Headers every image response carries.
 void setFrameHeaders(httplib::Response& res, const FrameStats& stats);

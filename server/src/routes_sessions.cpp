@@ -52,25 +52,6 @@ nlohmann::json statsToJson(const FrameStats& s, const std::optional<Error>& rend
   return out;
 }
 
-// Finds the session named in the path (running a pending default scene first), or answers 404.
-std::shared_ptr<Session> sessionOr404(Service& service, const httplib::Request& req, httplib::Response& res,
-                                      bool initialize = true) {
-  std::string id = req.matches[1];
-  auto session = service.sessions->find(id);
-  if (!session) {
-    sendError(res, 404, "not_found", "no session '" + id + "'", "session");
-    return nullptr;
-  }
-  if (initialize) session->ensureInitialized();
-  return session;
-}
-
-bool requireScene(Session& session, httplib::Response& res) {
-  if (session.hasScene()) return true;
-  sendError(res, 409, "no_scene", "session '" + session.id() + "' has no scene yet; PUT one first");
-  return false;
-}
-
 // Validates `json` and applies it under the held update lock; answers with the full scene.
 void applySceneJson(Service& service, Session& session, std::unique_lock<std::mutex>& lock, const nlohmann::json& json,
                     httplib::Response& res) {
@@ -197,6 +178,26 @@ nlohmann::json sessionSummary(Session& s) {
 }
 
 }  // namespace
+
+// Finds the session named in the path (running a pending default scene first), or answers 404.
+std::shared_ptr<Session> sessionOr404(Service& service, const httplib::Request& req, httplib::Response& res,
+                                      bool initialize) {
+  std::string id = req.matches[1];
+  auto session = service.sessions->find(id);
+  if (!session) {
+    sendError(res, 404, "not_found", "no session '" + id + "'", "session");
+    return nullptr;
+  }
+  if (initialize) session->ensureInitialized();
+  return session;
+}
+
+bool requireScene(Session& session, httplib::Response& res) {
+  if (session.hasScene()) return true;
+  sendError(res, 409, "no_scene", "session '" + session.id() + "' has no scene yet; PUT one first");
+  return false;
+}
+
 
 void registerSessionRoutes(httplib::Server& server, Service& service) {
   server.Get("/api/sessions", [&service](const httplib::Request&, httplib::Response& res) {

@@ -304,23 +304,9 @@ Result<SceneObject> parseObject(const json& j, const std::string& prefix, const 
   }
   obj.brdfName = brdfName;
 
-  for (const BrdfParam& p : obj.brdf->params) obj.params[p.name] = p.defaultValue;
-  if (params) {
-    for (auto it = params->begin(); it != params->end(); ++it) {
-      std::string field = prefix + ".params." + it.key();
-      const BrdfParam* p = obj.brdf->findParam(it.key());
-      if (!p) {
-        std::string known;
-        for (const BrdfParam& q : obj.brdf->params) known += (known.empty() ? "" : ", ") + q.name;
-        return invalid(field, "BRDF '" + brdfName + "' has no parameter '" + it.key() + "' (it has: " + known + ")");
-      }
-      Result<Vec3> value = readParamValue(*p, it.value(), field);
-      if (!value) return value.takeError();
-      std::string note;
-      obj.params[p->name] = clampParam(*p, value.value(), field, brdfName, note);
-      if (!note.empty() && notes) notes->push_back(std::move(note));
-    }
-  }
+  Result<std::map<std::string, Vec3>> values = paramsFromJson(*obj.brdf, brdfName, params, prefix + ".params", notes);
+  if (!values) return values.takeError();
+  obj.params = std::move(values.value());
   return obj;
 }
 
@@ -445,6 +431,30 @@ json sceneToJson(const Scene& s, const std::vector<std::string>& notes) {
         {"tonemap", toneMapName(s.render.toneMap)}}},
   };
   if (!notes.empty()) out["notes"] = notes;
+  return out;
+}
+
+Result<std::map<std::string, Vec3>> paramsFromJson(const BrdfDefinition& brdf, const std::string& brdfName,
+                                                   const json* params, const std::string& field,
+                                                   std::vector<std::string>* notes) {
+  std::map<std::string, Vec3> out;
+  for (const BrdfParam& p : brdf.params) out[p.name] = p.defaultValue;
+  if (!params) return out;
+  BRDFA_CHECK(checkObject(*params, field));
+  for (auto it = params->begin(); it != params->end(); ++it) {
+    std::string at = field + "." + it.key();
+    const BrdfParam* p = brdf.findParam(it.key());
+    if (!p) {
+      std::string known;
+      for (const BrdfParam& q : brdf.params) known += (known.empty() ? "" : ", ") + q.name;
+      return invalid(at, "BRDF '" + brdfName + "' has no parameter '" + it.key() + "' (it has: " + known + ")");
+    }
+    Result<Vec3> value = readParamValue(*p, it.value(), at);
+    if (!value) return value.takeError();
+    std::string note;
+    out[p->name] = clampParam(*p, value.value(), at, brdfName, note);
+    if (!note.empty() && notes) notes->push_back(std::move(note));
+  }
   return out;
 }
 

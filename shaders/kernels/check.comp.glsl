@@ -4,16 +4,16 @@
 //  - evaluates f(L, V) and f(V, L) over a grid of light directions with the same polar angles
 //    and eight azimuths: counts NaN, Inf and negative values, and the largest relative
 //    reciprocity error |f(L,V) - f(V,L)| / max(|f(L,V)|, |f(V,L)|, 1e-6);
-//  - estimates the directional albedo E(V) = integral f cos dL with 4096 cosine-weighted R2
-//    samples (estimator f * pi) and its standard error, so the host flags only significant
-//    excess over 1 (a grid cannot resolve near-delta lobes; their error bars say so).
+//  - estimates the directional albedo E(V) = integral f cos dL with lib/albedo.glsl (the file's
+//    sampler, else a cosine + half-vector mixture; 8 replicates of 1024 samples) and its
+//    standard error, so the host flags only significant excess over 1.
 // L = -V (both on the horizon, opposite azimuths) is left out: the half vector is 0/0 there, a
 // configuration of measure zero that the integrator never meets (it is counted apart).
 // Output per view (4 vec4):
 //   [4v]   = (nan, inf, negative, evaluations)
 //   [4v+1] = (albedo, its standard error, reciprocity error, pairs left out)
 //   [4v+2] = (grid index t*8+k of the worst reciprocity, its f(L,V), its f(V,L), where the
-//             first bad value was: grid index, or 100 + albedo sample index; -1: none)
+//             first bad value was: grid index, or 100: an albedo sample; -1: none)
 //   [4v+3] = (the first bad value, rgb; its kind: 1 NaN, 2 Inf, 3 negative)
 // albedo and error of the channel with the largest albedo; reciprocity values of the channel
 // with the largest relative error.
@@ -22,7 +22,8 @@ layout(local_size_x = 8, local_size_y = 1, local_size_z = 1) in;
 const int BRDFA_THETAS = 10;
 const float BRDFA_THETA_DEG[BRDFA_THETAS] = float[](0.0, 15.0, 30.0, 45.0, 60.0, 75.0, 85.0, 89.0, 89.9, 90.0);
 const uint BRDFA_VIEWS = 40u;  // 10 polar angles x 4 azimuths
-const uint BRDFA_ALBEDO_SAMPLES = 4096u;
+const uint BRDFA_ALBEDO_CHUNKS = 8u;          // independent replicates per view
+const uint BRDFA_ALBEDO_CHUNK_SAMPLES = 1024u;
 
 // Exactly on the horizon at 90 degrees: cos(radians(90.0)) is -4e-8 in float, below it.
 vec3 brdfa_checkDirection(float thetaDeg, float phi) {
@@ -84,21 +85,30 @@ void main() {
     }
   }
 
-  vec3 sum = vec3(0.0), sumSq = vec3(0.0);
-  for (uint i = 0u; i < BRDFA_ALBEDO_SAMPLES; ++i) {
-    float cosOverPdf;
-    vec3 L = brdfa_sampleCosineHemisphere(brdfa_sample2D(uvec2(0u), i), cosOverPdf);
-    vec3 f = BRDF(L, V, N, X, Y);
-    brdfa_tally(f, 100.0 + float(i), counts, firstAt, first);
-    evaluations += 1.0;
-    if (!brdfa_finite(f)) continue;
-    vec3 w = f * cosOverPdf;
-    sum += w;
-    sumSq += w * w;
+  // Albedo: BRDFA_ALBEDO_CHUNKS independent randomised replicates of lib/albedo.glsl's
+  // estimator; the spread of their means is the standard error.
+  vec3 chunkSum = vec3(0.0), chunkSumSq = vec3(0.0);
+  float nonFinite = 0.0;
+  for (uint k = 0u; k < BRDFA_ALBEDO_CHUNKS; ++k) {
+    vec3 sum = vec3(0.0);
+    uint j = v * BRDFA_ALBEDO_CHUNKS + k;
+    uvec2 rotation = uvec2(brdfa_hash(j * 0x9e3779b9u + 0x632be5abu), brdfa_hash(j ^ 0x85ebca6bu));
+    brdfa_albedoSamples(V, rotation, 0u, BRDFA_ALBEDO_CHUNK_SAMPLES, sum, nonFinite);
+    vec3 m = sum / float(BRDFA_ALBEDO_CHUNK_SAMPLES);
+    chunkSum += m;
+    chunkSumSq += m * m;
   }
-  float n = float(BRDFA_ALBEDO_SAMPLES);
-  vec3 mean = sum / n;
-  vec3 stderr = sqrt(max(sumSq / n - mean * mean, vec3(0.0)) / (n - 1.0));
+  evaluations += float(BRDFA_ALBEDO_CHUNKS * BRDFA_ALBEDO_CHUNK_SAMPLES);
+  if (nonFinite > 0.0) {
+    counts.x += nonFinite;  // NaN or Inf from an albedo sample
+    if (firstAt < 0.0) {
+      firstAt = 100.0;
+      first = vec4(0.0, 0.0, 0.0, 1.0);
+    }
+  }
+  float n = float(BRDFA_ALBEDO_CHUNKS);
+  vec3 mean = chunkSum / n;
+  vec3 stderr = sqrt(max(chunkSumSq / n - mean * mean, vec3(0.0)) / (n - 1.0));
   int c = mean.x >= mean.y && mean.x >= mean.z ? 0 : (mean.y >= mean.z ? 1 : 2);
   brdfa_accum[4u * v] = vec4(counts, evaluations);
   brdfa_accum[4u * v + 1u] = vec4(mean[c], stderr[c], reciprocity, leftOut);

@@ -652,5 +652,72 @@ TEST_F(LibraryApi, BatchJobOverAllRunsWhileTheStreamKeepsDelivering) {
   EXPECT_GE(partsDuringJob, 2) << "the stream stalled while the job ran";
 }
 
+// Issue 13 item 4: every built-in keeps what it claims, with zero NaN/Inf, and ggx's albedo
+// stays <= 1 down to roughness 0.001; a file that claims what it does not keep fails, and its
+// log names the worst case.
+TEST_F(LibraryApi, BatchTestOfEveryBuiltinHoldsItsClaims) {
+  const std::string frame =
+      "analytic\n::begin parameters\nfloat k 0 1 0.5\n::end parameters\n::begin shader\n"
+      "vec3 BRDF(vec3 L, vec3 V, vec3 N, vec3 X, vec3 Y) {\n  return ";
+  auto r = put("/api/brdfs/claims_reciprocity",
+               "# claims: reciprocity, non-negativity\n" + frame + "vec3(k + max(dot(N, V), 0.0)) / 3.14159265;\n}\n::end shader\n",
+               "text/plain");
+  ASSERT_TRUE(r && r->status == 201) << (r ? r->body : "");
+  r = put("/api/brdfs/claims_energy",
+          "# claims: energy-conservation\n" + frame + "vec3((0.5 + k) / 3.14159265);\n}\n::end shader\n", "text/plain");
+  ASSERT_TRUE(r && r->status == 201) << (r ? r->body : "");
+  json names = json::array();
+  for (const json& b : bodyJson(get("/api/brdfs")))
+    if (b["builtin"] == true) names.push_back(b["name"]);
+  ASSERT_GE(names.size(), 27u);
+  names.push_back("claims_reciprocity");
+  names.push_back("claims_energy");
+  r = post("/api/jobs/validate", json{{"names", names}}.dump());
+  ASSERT_TRUE(r && r->status == 202) << (r ? r->body : "");
+  const std::string id = bodyJson(r)["id"];
+  json job;
+  for (auto deadline = Clock::now() + std::chrono::seconds(600); Clock::now() < deadline;) {
+    job = bodyJson(get("/api/jobs/" + id));
+    if (job["state"] == "done") break;
+    std::this_thread::sleep_for(std::chrono::milliseconds(100));
+  }
+  ASSERT_EQ(job["state"], "done") << job.dump();
+  for (const json& res : job["results"]) {
+    const std::string name = res["name"];
+    const json& c = res["checks"];
+    std::string claims;
+    for (const json& claim : c["claims"])
+      claims += std::string(claim["claimed"] == true ? (claim["holds"] == true ? " +" : " !") : " ") +
+                claim["name"].get<std::string>();
+    std::fprintf(stderr, "%-24s ok %-5s max albedo %.4f +- %.4f  reciprocity %.2e  NaN %d  claims%s\n", name.c_str(),
+                 res["ok"] == true ? "yes" : "NO", c.value("max_albedo", -1.0), c.value("max_albedo_std_error", -1.0),
+                 c.value("max_reciprocity_error", -1.0), c.value("nan", -1), claims.c_str());
+    if (name.rfind("claims_", 0) == 0) {
+      EXPECT_EQ(res["ok"], false) << res.dump();
+      std::string log;
+      for (const json& line : res["log"]) log += line.get<std::string>() + "\n";
+      const std::string claim = name == "claims_energy" ? "energy-conservation" : "reciprocity";
+      EXPECT_NE(log.find("check: claim '" + claim + "' violated"), std::string::npos) << log;
+      EXPECT_NE(log.find("k = 1 (others at their defaults)"), std::string::npos) << log;  // the worst case, named
+      EXPECT_NE(log.find("at V (theta"), std::string::npos) << log;
+      continue;
+    }
+    EXPECT_EQ(res["ok"], true) << res.dump();
+    EXPECT_EQ(c["nan"], 0) << name;
+    EXPECT_EQ(c["inf"], 0) << name;
+    EXPECT_EQ(c["claims_declared"], true) << name;
+    for (const json& claim : c["claims"]) {
+      if (claim["claimed"] == true) {
+        EXPECT_EQ(claim["holds"], true) << name << ": " << claim.dump();
+      }
+    }
+    if (name == "ggx") {
+      EXPECT_LE(c["max_albedo"].get<double>(), 1.0) << c.dump();
+    }
+  }
+  del("/api/brdfs/claims_reciprocity");
+  del("/api/brdfs/claims_energy");
+}
+
 }  // namespace
 }  // namespace brdfa::itest

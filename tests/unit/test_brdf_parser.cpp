@@ -79,6 +79,30 @@ TEST(BrdfParser, ParsesAllParameterTypes) {
   EXPECT_FALSE(d.hasSampler());
 }
 
+// Issue 13: what a file claims, in a comment line the Explorer's reader skips.
+TEST(BrdfParser, ClaimsLine) {
+  Result<BrdfDefinition> none = parseBrdf(kLambert);
+  ASSERT_TRUE(none.ok());
+  EXPECT_FALSE(none->claims.declared);
+  EXPECT_FALSE(none->claims.reciprocity);
+
+  Result<BrdfDefinition> r = parseBrdf(std::string("# claims: reciprocity,energy-conservation  non-negativity\n") + kLambert);
+  ASSERT_TRUE(r.ok()) << r.error().message;
+  EXPECT_TRUE(r->claims.declared);
+  EXPECT_EQ(r->claims.line, 1);
+  EXPECT_TRUE(r->claims.reciprocity);
+  EXPECT_TRUE(r->claims.energyConservation);
+  EXPECT_TRUE(r->claims.nonNegativity);
+
+  Result<BrdfDefinition> nothing = parseBrdf(std::string("# claims: none\n") + kLambert);
+  ASSERT_TRUE(nothing.ok());
+  EXPECT_TRUE(nothing->claims.declared);
+  EXPECT_FALSE(nothing->claims.reciprocity || nothing->claims.energyConservation || nothing->claims.nonNegativity);
+
+  expectErrorAt(std::string("analytic\n# claims: reciprocity, energy\n") + (kLambert + 9), 2, "unknown claim 'energy'");
+  expectErrorAt(std::string("# claims: none\n# claims: reciprocity\n") + kLambert, 2, "second claims line");
+}
+
 TEST(BrdfParser, ShaderTextAndFirstLine) {
   Result<BrdfDefinition> r = parseBrdf(kLambert);
   ASSERT_TRUE(r.ok());

@@ -27,6 +27,19 @@ struct BrdfParam {
 
 enum class BrdfFormat { Explorer, Legacy };
 
+// What a file states about its BRDF, checked by Renderer::checkBrdf (issue 13). Declared by a
+// comment line outside the sections, which the Explorer's reader skips like any comment:
+//   # claims: reciprocity, energy-conservation, non-negativity
+// (names separated by commas or spaces; "none" claims nothing). A property not claimed is
+// still measured and reported, never failed.
+struct BrdfClaims {
+  bool declared = false;  // the file has a claims line
+  bool reciprocity = false;         // f(L, V) = f(V, L)
+  bool energyConservation = false;  // directional albedo <= 1 at every view
+  bool nonNegativity = false;       // every channel >= 0
+  int line = 0;                     // of the claims line
+};
+
 // A parsed .brdf file. The GLSL sections are kept verbatim together with the file line on
 // which they start, so diagnostics can be mapped back to the submitted text.
 struct BrdfDefinition {
@@ -37,6 +50,7 @@ struct BrdfDefinition {
   std::string sampleShader;    // body of `::begin sample`, empty when absent
   int sampleFirstLine = 0;
   std::vector<Diagnostic> warnings;  // e.g. an ignored `isFunc` section
+  BrdfClaims claims;
 
   const BrdfParam* findParam(std::string_view name) const;
   bool hasSampler() const { return !sampleShader.empty(); }

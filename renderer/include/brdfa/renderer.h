@@ -3,6 +3,7 @@
 #pragma once
 
 #include <cstdint>
+#include <map>
 #include <memory>
 #include <optional>
 #include <string>
@@ -97,6 +98,11 @@ struct FrameStats {
   // accumulators: sqrt(mean over object pixels of the mean's variance) / mean luminance.
   std::optional<double> relError;
   uint64_t relErrorSpp = 0;        // spp when relError was last measured (refreshed every ~200 ms)
+  // The pixels relError was measured over (covered by an object, with samples in both halves)
+  // and their mean luminance, at the same moment: relError * meanLuminance is the RMS standard
+  // error of those pixels (a difference of two images needs it, frame_difference.h).
+  uint64_t errorPixels = 0;
+  double errorMeanLuminance = 0;
   double relErrorElapsedMs = 0;    // elapsedMs at that moment
   uint64_t vertices = 0;
   uint64_t triangles = 0;
@@ -174,17 +180,34 @@ struct RendererCounters {
   uint64_t quarantinedPrograms = 0;  // isolated renderers: programs refused since (see RendererOptions)
 };
 
-// Numeric checks of one BRDF on the device (issue 3 item 6), through a compute kernel that
-// evaluates the same BRDF() code the renderer shades with. Directions: a grid over view and
-// light polar angles up to 89.9 degrees and exactly 90, and azimuths; parameters: every
-// parameter at its minimum, maximum and default (one varied at a time, others at default).
+// One property a file may claim (BrdfClaims), as checked: measured always, failed only when
+// claimed.
+struct ClaimVerdict {
+  std::string name;      // "reciprocity" | "energy-conservation" | "non-negativity"
+  bool claimed = false;
+  bool holds = true;     // the measurement is within the property's limit (below)
+  std::string measured;  // the figure and its worst case, for a person
+};
+
+// Numeric checks of one BRDF on the device (issue 3 item 6; issue 13), through a compute
+// kernel that evaluates the same BRDF() code the renderer shades with. Directions: a grid over
+// view and light polar angles up to 89.9 degrees and exactly 90, and azimuths (L = -V on the
+// horizon, where the half vector is 0/0, is left out and counted); parameters: every parameter
+// at its minimum, maximum and default (one varied at a time, others at default). The albedo at
+// each view and setting comes from lib/albedo.glsl (importance sampling with the file's
+// sampler, else a cosine + half-vector mixture; 8 x 1024 samples) with its standard error.
+// Limits: reciprocity holds when every relative error is <= kReciprocityLimit; energy
+// conservation when no albedo exceeds 1 by more than 3 standard errors (+ kAlbedoSlack for
+// float rounding); non-negativity when no channel is < 0. NaN and Inf always fail.
 struct BrdfCheckReport {
+  static constexpr double kReciprocityLimit = 1e-3, kAlbedoSlack = 1e-3, kAlbedoSigmas = 3.0;
   uint64_t evaluations = 0;
   uint64_t nanCount = 0;
   uint64_t infCount = 0;
   uint64_t negativeCount = 0;       // any channel < 0
   double maxAlbedo = 0;             // largest directional albedo over view angles and settings
-  uint64_t albedoAboveOne = 0;      // (view angle, setting) pairs with albedo > 1.01
+  double maxAlbedoStdError = 0;     // its standard error
+  uint64_t albedoAboveOne = 0;      // (view angle, setting) pairs whose albedo is significantly > 1
   double maxReciprocityError = 0;   // max |f(L,V) - f(V,L)| / max(|f(L,V)|, |f(V,L)|, 1e-6)
   uint64_t leftOut = 0;             // (L, V) pairs of measure zero not evaluated: L = -V on the horizon
   // Where the worst case of each finding is, for a person: the parameter setting, the view and
@@ -192,8 +215,14 @@ struct BrdfCheckReport {
   std::string worstReciprocity;     // where maxReciprocityError was found (when > 0)
   std::string firstBadValue;        // the first NaN, Inf or negative value met
   std::string worstAlbedo;          // where maxAlbedo was found, with its standard error
+  std::vector<ClaimVerdict> claims; // the three properties, in the order above
   double ms = 0;                    // wall time of the check
-  bool ok() const { return nanCount == 0 && infCount == 0 && negativeCount == 0; }
+  bool ok() const {
+    if (nanCount != 0 || infCount != 0) return false;
+    for (const ClaimVerdict& c : claims)
+      if (c.claimed && !c.holds) return false;
+    return true;
+  }
 };
 
 // Checks of a file's sampleBRDF() (issue 3; issue 11: in many frames and views), at default
@@ -300,6 +329,26 @@ struct EnvironmentSamplerReport {
   }
 };
 
+// Analysis of one BRDF on the device (issue 13): the file's own compiled BRDF() (legacy
+// render() files are Unsupported), in the frame N = +z, X = +x, Y = +y. A setting maps
+// parameter names to values; names it leaves out take the file's defaults.
+using ParamSetting = std::map<std::string, Vec3>;
+struct DirectionPair {
+  Vec3 light{0, 0, 1};  // L, unit
+  Vec3 view{0, 0, 1};   // V, unit
+};
+// Directional albedo E(V) = integral of f(L, V) (N.L) dL, per channel, with the standard error
+// of the estimate: the file's sampleBRDF() where it has one (importance sampling), else a
+// cosine + log-polar half-vector mixture that resolves lobes down to 1e-6 rad
+// (shaders/lib/albedo.glsl); the error is the spread of independent randomised replicates.
+struct AlbedoEstimate {
+  Vec3 mean{0, 0, 0};
+  Vec3 stdError{0, 0, 0};
+  uint64_t samples = 0;    // evaluations behind the estimate
+  uint64_t nonFinite = 0;  // NaN or Inf values of f cos / pdf, left out of the mean
+};
+const char* albedoEstimatorName(const BrdfDefinition& brdf);  // "brdf sampler" | "cosine + half-vector mixture"
+
 class Renderer {
  public:
   virtual ~Renderer() = default;
@@ -320,6 +369,18 @@ class Renderer {
 
   // Runs the sampler checks above; InvalidArgument when the file has no sample section.
   virtual Result<SamplerCheckReport> checkSampler(const BrdfDefinition& brdf) = 0;
+
+  // f(L, V) at every pair, for every setting: values[s * pairs.size() + p] (Analysis above).
+  // Thread-safe; compiles the BRDF's analysis kernel (CompileError on failure).
+  virtual Result<std::vector<Vec3>> evaluateBrdf(const BrdfDefinition& brdf, const std::vector<ParamSetting>& settings,
+                                                 const std::vector<DirectionPair>& pairs) = 0;
+
+  // The directional albedo at every view (unit, N.V > 0), for every setting, from about
+  // samplesPerView samples each (rounded up to whole replicates of 1024): out[s * views.size() + v].
+  virtual Result<std::vector<AlbedoEstimate>> estimateAlbedo(const BrdfDefinition& brdf,
+                                                             const std::vector<ParamSetting>& settings,
+                                                             const std::vector<Vec3>& views,
+                                                             uint32_t samplesPerView) = 0;
 
   // Runs the environment sampler checks above on `environment` (a built-in or registered name).
   virtual Result<EnvironmentSamplerReport> checkEnvironmentSampler(const std::string& environment) = 0;

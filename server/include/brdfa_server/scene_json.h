@@ -4,6 +4,7 @@
 // InvalidArgument (400), unknown BRDF/environment/mesh names NotFound (404).
 #pragma once
 
+#include <map>
 #include <memory>
 #include <nlohmann/json.hpp>
 #include <string>
@@ -45,6 +46,14 @@ Result<Scene> sceneFromJson(const nlohmann::json& json, const SceneResolver& res
 // One parameter value with the rules of `objects[i].params` (right type, finite, bools as
 // true/false/0/1); errors are InvalidArgument naming `field`.
 Result<Vec3> paramValueFromJson(const BrdfParam& param, const nlohmann::json& value, const std::string& field);
+
+// A BRDF's parameter values from a JSON object of name -> value (null: none given), with the
+// rules of `objects[i].params`: every parameter present (missing ones at the file's default),
+// unknown names and bad values InvalidArgument naming `field`.name, values outside the range
+// clamped with a note in `notes` (optional).
+Result<std::map<std::string, Vec3>> paramsFromJson(const BrdfDefinition& brdf, const std::string& brdfName,
+                                                   const nlohmann::json* params, const std::string& field,
+                                                   std::vector<std::string>* notes = nullptr);
 
 // The full scene with every field present, plus "notes" (what sceneFromJson clamped) when
 // `notes` is not empty.
