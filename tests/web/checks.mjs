@@ -5,11 +5,12 @@ import { join } from 'node:path';
 
 const sleep = (ms) => new Promise((r) => setTimeout(r, ms));
 
-async function http(env, method, path, body) {
+// JSON in and out; a `type` sends `body` as it is (a .brdf text).
+async function http(env, method, path, body, type) {
   const res = await fetch(env.server.url + path, {
     method,
-    headers: body === undefined ? {} : { 'Content-Type': 'application/json' },
-    body: body === undefined ? undefined : JSON.stringify(body),
+    headers: body === undefined ? {} : { 'Content-Type': type || 'application/json' },
+    body: body === undefined ? undefined : type ? body : JSON.stringify(body),
   });
   const text = await res.text();
   if (!res.ok) throw new Error(`${method} ${path}: ${res.status} ${text}`);
@@ -213,7 +214,14 @@ export const checks = [
 
   ['the test window runs a batch: progress reaches 1, results appear, the view keeps rendering', async (env) => {
     const { page, sid } = env;
-    const names = ['lambert', 'phong', 'ward'];
+    // A file that claims reciprocity it does not have: its row must highlight that claim.
+    const liar = 'analytic\n# claims: reciprocity, non-negativity\n::begin parameters\nfloat k 0 1 0.5\n' +
+      '::end parameters\n::begin shader\nvec3 BRDF(vec3 L, vec3 V, vec3 N, vec3 X, vec3 Y) {\n' +
+      '  return vec3(k + max(dot(N, V), 0.0)) / 3.14159265;\n}\n::end shader\n';
+    await http(env, 'PUT', '/api/brdfs/web_claims_liar', liar, 'text/plain');
+    await page.reload();
+    await env.waitForFrame(page, { minVariance: 20 });
+    const names = ['lambert', 'phong', 'ward', 'web_claims_liar'];
     // Uncapped, so the session renders (and streams) new passes for the whole job.
     await http(env, 'PATCH', `/api/sessions/${sid}/scene`, { render: { max_samples: 1048576 } });
     await page.bringToFront();   // a background tab's animation frames are throttled
@@ -244,17 +252,33 @@ export const checks = [
     await until('the progress bar to reach 1', () => page.evaluate(() => window.__job.end > 0), 60000);
     const job = await page.evaluate(() => window.__job);
     const rows = await page.locator('#tests .test-results tbody tr').allTextContents();
-    assert.equal(rows.length, 3, 'one result row per BRDF');
+    assert.equal(rows.length, 4, 'one result row per BRDF');
     for (const [i, n] of names.entries()) assert.ok(rows[i].startsWith(n), `row ${i} is ${n}: ${rows[i]}`);
     const cells = await page.locator('#tests .test-results tbody tr:first-child td').allTextContents();
     assert.equal(cells[1], 'yes', 'lambert passes');
     assert.ok(Number.isFinite(parseFloat(cells[3])), `compile ms shown: ${cells[3]}`);
-    assert.match(await page.locator('#tests .test-status').textContent(), /^done: 3\/3/);
+    assert.match(await page.locator('#tests .test-status').textContent(), /^done: 4\/4/);
+    // Claims: lambert holds all three; phong claims only non-negativity (the rest reported,
+    // greyed); the liar's reciprocity is highlighted as violated, and only that.
+    const chips = (row) => page.locator(`#tests .test-results tbody tr:nth-child(${row}) .claim`).evaluateAll(
+      (els) => els.map((e) => `${e.dataset.claim}:${e.className.replace('claim ', '')}`));
+    assert.deepEqual(await chips(1), ['reciprocity:holds', 'energy-conservation:holds', 'non-negativity:holds']);
+    assert.deepEqual(await chips(2), ['reciprocity:unclaimed', 'energy-conservation:unclaimed', 'non-negativity:holds']);
+    assert.deepEqual(await chips(4), ['reciprocity:violated', 'energy-conservation:unclaimed', 'non-negativity:holds']);
+    const liarCells = await page.locator('#tests .test-results tbody tr:nth-child(4) td').allTextContents();
+    assert.equal(liarCells[1], 'NO', 'a violated claim fails the BRDF');
+    const red = await page.locator('#tests .test-results tbody tr:nth-child(4) .claim.violated')
+      .evaluate((e) => getComputedStyle(e).backgroundColor);
+    assert.equal(red, 'rgb(187, 0, 0)', 'the violated claim is highlighted');
+    await page.locator('#tests .test-results tbody tr:nth-child(4) button').click();
+    assert.match(await page.locator('#tests .test-log').textContent(), /check: claim 'reciprocity' violated: .*at V \(theta/,
+      'the log names the worst case');
     assert.match(await page.locator('#tests .test-log').textContent(), /^lambert:/, 'the first log is shown');
     console.log(`TIMING test window: 3 BRDFs in ${(job.end - job.start).toFixed(0)} ms, ` +
       `${job.frames} new frames on screen meanwhile, progress ${job.progress.join(' -> ')}`);
     assert.ok(job.frames >= 2, `the stream kept delivering frames during the job (${job.frames})`);
     await shot(env, page, '07-test-window');
+    await http(env, 'DELETE', '/api/brdfs/web_claims_liar');
     await page.click('.tabs [data-tab="tab-editor"]');
     await capSamples(env, sid);
   }],

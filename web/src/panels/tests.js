@@ -7,6 +7,25 @@ import { set, on } from '../state.js';
 const POLL_MS = 250;
 const num = (x, d = 3) => (typeof x === 'number' ? (Math.abs(x) < 1e-3 && x !== 0 ? x.toExponential(1) : x.toFixed(d)) : '');
 
+const CLAIM_SHORT = { reciprocity: 'recip.', 'energy-conservation': 'energy', 'non-negativity': '≥ 0' };
+
+// The file's claims as chips: held, violated (highlighted, the measurement in its tooltip), or
+// measured but not claimed (never a failure).
+function claimsCell(claims) {
+  const td = document.createElement('td');
+  td.className = 'claims';
+  for (const c of claims || []) {
+    const chip = document.createElement('span');
+    const state = !c.claimed ? 'unclaimed' : c.holds ? 'holds' : 'violated';
+    chip.className = `claim ${state}`;
+    chip.dataset.claim = c.name;
+    chip.textContent = (state === 'violated' ? '✗ ' : state === 'holds' ? '✓ ' : '') + (CLAIM_SHORT[c.name] || c.name);
+    chip.title = `${c.name}: ${state === 'unclaimed' ? 'not claimed (reported only)' : state}. ${c.measured}`;
+    td.append(chip);
+  }
+  return td;
+}
+
 export function mountTests(el) {
   const names = el.querySelector('.test-names');
   const all = el.querySelector('.test-all');
@@ -54,8 +73,10 @@ export function mountTests(el) {
       const c = r.checks || {};
       const cells = [r.name, r.ok ? 'yes' : 'NO', r.errors, num(r.compile_ms, 1) + (r.cached ? ' (cached)' : ''),
         c.error ? c.error : c.nan, c.error ? '' : c.inf, c.error ? '' : c.negative,
-        num(c.max_albedo), num(c.max_reciprocity_error)];
+        c.max_albedo_std_error ? `${num(c.max_albedo)} ± ${num(c.max_albedo_std_error)}` : num(c.max_albedo),
+        num(c.max_reciprocity_error)];
       for (const v of cells) { const td = document.createElement('td'); td.textContent = String(v ?? ''); tr.append(td); }
+      tr.append(claimsCell(c.claims));
       const td = document.createElement('td');
       const b = document.createElement('button');
       b.type = 'button';
