@@ -106,9 +106,9 @@ BrdfFeatures detectFeatures(const BrdfDefinition& brdf) {
     if (countWholeWords(code, t) > 0) f.textures = true;
 
   if (brdf.format == BrdfFormat::Legacy) {
-    // render(L, N, V, textureCord, worldToLocal): the frame is its 5th parameter.
-    std::vector<std::string> names = parameterNames(code, "render");
-    f.tangentFrame = names.size() < 5 || names[4].empty() || countWholeWords(code, names[4]) > 1;
+    // render(L, N, V, textureCord, worldToLocal): the engine built worldToLocal from N and V
+    // (kernels/shade.comp.glsl), never from the surface's tangent.
+    f.tangentFrame = false;
     return f;
   }
   // name -> number of signatures declaring it. X, Y are parameters 4 and 5 of both

@@ -8,8 +8,8 @@
 namespace brdfa {
 
 struct BrdfFeatures {
-  bool tangentFrame = true;  // BRDF() (or sampleBRDF()) reads its X or Y argument
-                             // (a legacy render(): its worldToLocal argument)
+  bool tangentFrame = true;  // BRDF() (or sampleBRDF()) reads its X or Y argument (never for a
+                             // legacy render(): the engine's worldToLocal is built from N and V)
   bool textures = true;      // the code names iTexture0..iTexture3
   bool samplerPdf = false;   // the sample section defines float pdfBRDF(...) (our extension)
 };
@@ -30,5 +30,6 @@ bool definesFunction(std::string_view code, std::string_view type, std::string_v
 
 // Occurrences of `word` in `text` not inside a longer identifier.
 int countWholeWords(std::string_view text, std::string_view word);
+
 
 }  // namespace brdfa

@@ -21,7 +21,8 @@
 //
 // A BRDFA Engine file (BRDFA_LEGACY_RENDER) is run as that engine ran it instead: the pixel is
 // the plain average of its render(L, N, V, texCoord, worldToLocal) over uniform hemisphere
-// samples, render() doing its own environment lookup and cosine. That is not an estimate of
+// samples, render() doing its own environment lookup and cosine, with the engine's
+// worldToLocal (below). That is not an estimate of
 // L_o (it lacks the 2 pi of the uniform pdf, and whatever the file leaves out); it reproduces
 // the engine's images, and such files are marked "legacy" and never analysed.
 
@@ -89,6 +90,18 @@ void main() {
   // isotropic hemisphere samplers, and this one needs no tangent.
   brdfa_basisFromNormal(N, X, Y);
 #endif
+#if defined(BRDFA_LEGACY_RENDER)
+  // render()'s worldToLocal, built as the BRDFA Engine built it (Mohido/BRDFA_Engine,
+  // BRDFA_Engine/shaders/main.frag at commit 97f1b36eb3b864d242055928a29cc76c31274a5b):
+  // transpose(mat3(T, N, B)) with T = normalize(cross(V, N)) and B = normalize(cross(T, N)),
+  // i.e. rows T, N, B: worldToLocal * v = (T.v, N.v, B.v), so N maps to (0, 1, 0) and V to
+  // (0, N.V, -|V x N|). The frame turns with V and never reads the surface's tangent. Where V is
+  // along N the engine's T is NaN; X (a unit tangent, orthogonal to N) stands in there.
+  vec3 engineT = cross(V, N);
+  float engineT2 = dot(engineT, engineT);
+  engineT = engineT2 > 1e-12 ? engineT * inversesqrt(engineT2) : X;
+  mat3 worldToLocal = transpose(mat3(engineT, N, normalize(cross(engineT, N))));
+#endif
 
   uint seed = brdfa_pc.target.y;  // render.seed
   uvec4 rotationA = brdfa_halfRotation(p, 0u, seed), rotationB = brdfa_halfRotation(p, 1u, seed);
@@ -123,8 +136,7 @@ void main() {
     float unusedWeight;
     vec3 l = brdfa_sampleUniformHemisphere(brdfa_unorm2(u.xy), unusedWeight);
     vec3 L = X * l.x + Y * l.y + N * l.z;
-    // Rows X, Y, N: world (environment frame) -> local tangent space.
-    vec3 c = render(L, N, V, texCoord, transpose(mat3(X, Y, N)));
+    vec3 c = render(L, N, V, texCoord, worldToLocal);
 #elif defined(BRDFA_SAMPLING_BRDF)
     // The file's own importance sampler: it returns f(L, V) and the solid-angle pdf of L.
     vec3 L;

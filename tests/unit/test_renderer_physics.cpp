@@ -30,17 +30,26 @@ class RendererPhysics : public DeviceTest {
 
   static Frame renderToConvergence(RenderView& view) { return renderUntilDone(view); }
 
-  // Pixels whose 3x3 neighbourhood is covered (away from the silhouette), by red channel.
-  static std::vector<float> interior(const Frame& f) {
-    std::vector<float> out;
+  // Colours of the pixels whose 3x3 neighbourhood is covered (away from the silhouette; the
+  // hidden background is black).
+  static std::vector<Vec3> interiorRgb(const Frame& f) {
+    auto at = [&](int x, int y) { return &f.rgba32f[4 * (y * f.width + x)]; };
+    auto covered = [&](int x, int y) { return at(x, y)[0] != 0.0f || at(x, y)[1] != 0.0f || at(x, y)[2] != 0.0f; };
+    std::vector<Vec3> out;
     for (int y = 1; y + 1 < f.height; ++y)
       for (int x = 1; x + 1 < f.width; ++x) {
-        bool covered = true;
+        bool inside = true;
         for (int dy = -1; dy <= 1; ++dy)
-          for (int dx = -1; dx <= 1; ++dx)
-            covered = covered && f.rgba32f[4 * ((y + dy) * f.width + x + dx)] != 0.0f;
-        if (covered) out.push_back(f.rgba32f[4 * (y * f.width + x)]);
+          for (int dx = -1; dx <= 1; ++dx) inside = inside && covered(x + dx, y + dy);
+        if (inside) out.push_back(Vec3{at(x, y)[0], at(x, y)[1], at(x, y)[2]});
       }
+    return out;
+  }
+
+  // The same pixels' red channel.
+  static std::vector<float> interior(const Frame& f) {
+    std::vector<float> out;
+    for (const Vec3& v : interiorRgb(f)) out.push_back(v[0]);
     return out;
   }
 
@@ -50,6 +59,17 @@ class RendererPhysics : public DeviceTest {
     return v.empty() ? 0 : s / v.size();
   }
 
+  // The interior pixels of a legacy render() file rendered in the hidden furnace.
+  static std::vector<Vec3> legacyFurnacePixels(const std::string& text, int spp) {
+    auto brdf = inlineBrdf(text);
+    if (!brdf) return {};
+    EXPECT_EQ(brdf->format, BrdfFormat::Legacy) << text;
+    auto view = renderer_->createView().value();
+    auto set = view->setScene(furnaceScene(brdf, 48, spp));
+    EXPECT_TRUE(set.ok()) << text << ": " << (set.ok() ? "" : set.error().message);
+    if (!set.ok()) return {};
+    return interiorRgb(renderUntilDone(*view));
+  }
 };
 
 TEST_F(RendererPhysics, WhiteLambertInFurnaceIsOneWithCosineSampling) {
@@ -137,8 +157,9 @@ TEST_F(RendererPhysics, LegacyRenderIsThePlainAverageOverTheHemisphere) {
       {"return texture(skybox, L).rgb * iParameter0 * 2.0;", 1.0f, 1e-5f},
       // The average of cos(theta) over uniform directions is 1/2: no cosine/pdf weighting.
       {"return vec3(dot(L, N));", 0.5f, 0.01f},
-      // worldToLocal takes N to +z and L into the upper hemisphere.
-      {"vec3 l = worldToLocal * L; return vec3((worldToLocal * N).z * float(l.z >= 0.0));", 1.0f, 1e-5f},
+      // The engine's worldToLocal has N as its second row: it takes N to +y and L into the
+      // upper hemisphere of y (LegacyWorldToLocalIsTheEnginesViewAlignedFrame pins all rows).
+      {"vec3 l = worldToLocal * L; return vec3((worldToLocal * N).y * float(l.y >= 0.0));", 1.0f, 1e-5f},
       // An unbound texture reads as white.
       {"return texture(iTexture0, textureCord).rgb;", 1.0f, 1e-5f},
   };
@@ -158,6 +179,40 @@ TEST_F(RendererPhysics, LegacyRenderIsThePlainAverageOverTheHemisphere) {
     ASSERT_GT(px.size(), 300u) << c.body;
     EXPECT_NEAR(mean(px), c.expected, c.tolerance) << c.body;
   }
+}
+
+std::string engineStyleFile(const std::string& before, const std::string& body) {
+  return before + "vec3 render(vec3 L, vec3 N, vec3 V, vec2 textureCord, mat3 worldToLocal){\n\t" + body + "\n}\n";
+}
+
+// worldToLocal as the engine built it (shaders/kernels/shade.comp.glsl): rows T, N, B with
+// T = normalize(cross(V, N)) and B = normalize(cross(T, N)), so N is its second row. Every pixel
+// of the sphere has another normal, almost all of them off the axes.
+TEST_F(RendererPhysics, LegacyWorldToLocalIsTheEnginesViewAlignedFrame) {
+  // worldToLocal * N = (0, 1, 0): with rows X, Y, N it would be (0, 0, 1).
+  std::vector<Vec3> px =
+      legacyFurnacePixels(engineStyleFile("", "return 0.5 + 0.5 * (worldToLocal * N);"), 16);
+  ASSERT_GT(px.size(), 300u);
+  for (const Vec3& v : px) {
+    ASSERT_NEAR(v[0], 0.5f, 1e-4f);
+    ASSERT_NEAR(v[1], 1.0f, 1e-4f);
+    ASSERT_NEAR(v[2], 0.5f, 1e-4f);
+  }
+  // The first and third rows: V goes to (0, N.V, -|V x N|) and V x N to (|V x N|, 0, 0). The
+  // file returns 1 plus the residuals.
+  px = legacyFurnacePixels(engineStyleFile("", "vec3 c = cross(V, N);\n"
+                                               "\treturn vec3(1.0) + abs(worldToLocal * V - vec3(0.0, dot(N, V), -length(c)))\n"
+                                               "\t     + abs(worldToLocal * c - vec3(length(c), 0.0, 0.0));"),
+                           16);
+  ASSERT_GT(px.size(), 300u);
+  for (const Vec3& v : px)
+    for (int i = 0; i < 3; ++i) ASSERT_NEAR(v[i], 1.0f, 1e-4f) << "channel " << i;
+  // And the pixels' normals really vary: worldToLocal's first row, T, is not one fixed vector.
+  px = legacyFurnacePixels(engineStyleFile("", "return 2.0 + transpose(worldToLocal)[0];"), 16);
+  ASSERT_GT(px.size(), 300u);
+  float lo = 10.0f, hi = -10.0f;
+  for (const Vec3& v : px) lo = std::min(lo, v[0]), hi = std::max(hi, v[0]);
+  EXPECT_GT(hi - lo, 0.5f);
 }
 
 // The sun's highlight on a sphere in image space: intensity-weighted centroid, and the
