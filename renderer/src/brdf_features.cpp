@@ -97,6 +97,38 @@ bool definesFunction(std::string_view code, std::string_view type, std::string_v
   return false;
 }
 
+bool declaresName(std::string_view code, std::string_view name) {
+  const std::string text = withoutComments(code);
+  auto isSpace = [](char c) { return c == ' ' || c == '\t' || c == '\r'; };
+  for (size_t at = text.find(name); at != std::string::npos; at = text.find(name, at + 1)) {
+    const size_t end = at + name.size();
+    if ((at > 0 && identChar(text[at - 1])) || (end < text.size() && identChar(text[end]))) continue;
+    const size_t newline = text.rfind('\n', at);
+    const size_t first = text.find_first_not_of(" \t\r", newline == std::string::npos ? 0 : newline + 1);
+    if (first < at && text[first] == '#') {
+      // A directive: only `# define name` and `# undef name` give it a meaning here.
+      std::string_view word(text.data() + first + 1, at - first - 1);
+      while (!word.empty() && isSpace(word.front())) word.remove_prefix(1);
+      while (!word.empty() && isSpace(word.back())) word.remove_suffix(1);
+      if (word == "define" || word == "undef") return true;
+      continue;
+    }
+    size_t before = at;
+    while (before > 0 && std::isspace(static_cast<unsigned char>(text[before - 1]))) --before;
+    if (before > 0 && text[before - 1] == ']') return true;
+    if (before > 0 && identChar(text[before - 1])) {
+      size_t wordStart = before;
+      while (wordStart > 0 && identChar(text[wordStart - 1])) --wordStart;
+      if (text.compare(wordStart, before - wordStart, "return") != 0) return true;
+    }
+    size_t after = end;
+    while (after < text.size() && std::isspace(static_cast<unsigned char>(text[after]))) ++after;
+    if (after < text.size() && text[after] == '=' && (after + 1 == text.size() || text[after + 1] != '='))
+      return true;
+  }
+  return false;
+}
+
 BrdfFeatures detectFeatures(const BrdfDefinition& brdf) {
   BrdfFeatures f;
   f.samplerPdf = brdf.hasSampler() && definesFunction(brdf.sampleShader, "float", "pdfBRDF");

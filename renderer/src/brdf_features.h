@@ -31,5 +31,11 @@ bool definesFunction(std::string_view code, std::string_view type, std::string_v
 // Occurrences of `word` in `text` not inside a longer identifier.
 int countWholeWords(std::string_view text, std::string_view word);
 
+// True when `code`, outside its // and /* */ comments, gives `name` a meaning of its own: a
+// `#define name` or `#undef name` line, a declaration (`name` right after a type or qualifier
+// word other than `return`, or after `]`: `const float name = ...`, `float name(`, a parameter
+// or struct member), or a store into it (`name =`). Uses in expressions (`2.0 * name`,
+// `return name;`, `f(name)`) are not.
+bool declaresName(std::string_view code, std::string_view name);
 
 }  // namespace brdfa

@@ -11,6 +11,8 @@
 #include <cstring>
 #include <unordered_set>
 
+#include "brdf_features.h"
+
 namespace brdfa {
 
 namespace {
@@ -195,6 +197,21 @@ void collectDefinedMacros(const std::string& text, std::vector<std::string>& out
   }
 }
 
+// The names the BRDFA Engine's host shader defines for a render() file, with the engine's text.
+// The engine compiled each .brdf file appended to that shader (Mohido/BRDFA_Engine at commit
+// 97f1b36eb3b864d242055928a29cc76c31274a5b: BRDFA_Engine/src/brdfa_engine.cpp,
+// loadPipelines(), concatenates shaders/main.frag and the file's text; main.frag opens with
+// `#define PI 3.14159265359` and `#define LI 8.`, LI being the light intensity its earlier host
+// multiplied the skybox by). Here each is defined only where the file gives the name no meaning
+// of its own (declaresName): a file's identical `#define PI 3.14159265359` compiled in the
+// engine and still does, and a different #define or a `const float PI = ...`, which the engine
+// rejected, compiles with the file's own meaning.
+struct EngineMacro {
+  const char* name;
+  const char* value;
+};
+constexpr EngineMacro kEngineMacros[] = {{"PI", "3.14159265359"}, {"LI", "8."}};
+
 }  // namespace
 
 ParamBlockLayout layoutParams(const std::vector<BrdfParam>& params) {
@@ -263,13 +280,23 @@ AssembledProgram assembleProgram(const ProgramSpec& spec) {
     collectBuiltinOverrides(spec.brdf->shader, renamed);
     if (spec.brdf->hasSampler()) collectBuiltinOverrides(spec.brdf->sampleShader, renamed);
     for (const std::string& name : renamed) s += "#define " + name + " brdfa_user_" + name + "\n";
+    // A BRDFA Engine file sees the names its engine defined (kEngineMacros), in the generated
+    // region like the renames, and they end with its text like its own macros.
+    std::vector<std::string> macros;
+    if (spec.brdf->format == BrdfFormat::Legacy) {
+      const std::string userText = spec.brdf->shader + "\n" + spec.brdf->sampleShader;
+      for (const EngineMacro& m : kEngineMacros) {
+        if (declaresName(userText, m.name)) continue;
+        s += std::string("#define ") + m.name + " " + m.value + "\n";
+        macros.emplace_back(m.name);
+      }
+    }
 
     appendUserText(s, spec.brdf->shader, spec.brdf->shaderFirstLine);
     if (spec.brdf->hasSampler())
       appendUserText(s, spec.brdf->sampleShader, spec.brdf->sampleFirstLine);
     for (const std::string& name : renamed) s += "#undef " + name + "\n";
     // The BRDF's own macros end with its text: none may rewrite the integrator's code.
-    std::vector<std::string> macros;
     collectDefinedMacros(spec.brdf->shader, macros);
     if (spec.brdf->hasSampler()) collectDefinedMacros(spec.brdf->sampleShader, macros);
     for (const std::string& name : macros) s += "#undef " + name + "\n";

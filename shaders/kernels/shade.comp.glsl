@@ -22,7 +22,7 @@
 // A BRDFA Engine file (BRDFA_LEGACY_RENDER) is run as that engine ran it instead: the pixel is
 // the plain average of its render(L, N, V, texCoord, worldToLocal) over uniform hemisphere
 // samples, render() doing its own environment lookup and cosine, with the engine's
-// worldToLocal (below). That is not an estimate of
+// worldToLocal (below) and its PI and LI (program_assembler.cpp). That is not an estimate of
 // L_o (it lacks the 2 pi of the uniform pdf, and whatever the file leaves out); it reproduces
 // the engine's images, and such files are marked "legacy" and never analysed.
 

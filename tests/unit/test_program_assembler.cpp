@@ -1,5 +1,5 @@
-// Program assembly: std140 parameter block, packing, section order, #line directives and the
-// renaming of user functions that shadow GLSL built-ins.
+// Program assembly: std140 parameter block, packing, section order, #line directives, the
+// renaming of user functions that shadow GLSL built-ins, and the BRDFA Engine's PI and LI.
 #include <gtest/gtest.h>
 
 #include <cstring>
@@ -7,6 +7,7 @@
 #include <string>
 #include <vector>
 
+#include "brdf_features.h"
 #include "glsl_compiler.h"
 #include "program_assembler.h"
 
@@ -336,6 +337,123 @@ TEST_F(Assembly, BuiltinOverridesCompileAndKeepLineNumbers) {
   ASSERT_FALSE(bad.ok());
   ASSERT_FALSE(bad.error().diagnostics.empty());
   EXPECT_EQ(bad.error().diagnostics.front().line, 14) << bad.error().diagnostics.front().message;
+}
+
+// What gives a name a meaning of its own in a file (brdf_features.h), for the BRDFA Engine's
+// PI and LI below.
+TEST(DeclaresName, DefinitionsAndDeclarationsButNotUses) {
+  const struct {
+    const char* code;
+    bool declares;
+  } cases[] = {
+      {"#define PI 3.14159265359\n", true},
+      {"  #  define PI 3.0\n", true},
+      {"#undef PI\n", true},
+      {"const float PI = 3.14159;\n", true},
+      {"float PI;\n", true},
+      {"float f(float PI) { return PI; }\n", true},
+      {"float PI() { return 3.0; }\n", true},
+      {"struct S { float PI; };\n", true},
+      {"float[2] PI = float[2](1.0, 2.0);\n", true},
+      {"void f() { PI = 3.0; }\n", true},
+      {"vec3 f() { return vec3(PI); }\n", false},
+      {"vec3 f() { return vec3(2.0 * PI, PI / 2.0, float(PI == 3.0)); }\n", false},
+      {"float f() { return PI; }\n", false},
+      {"#define TWO_PI (2.0 * PI)\n#if defined(PI)\n#endif\n", false},
+      {"// const float PI = 3.0;\n/* #define PI 3.0 */ float f() { return PI; }\n", false},
+      {"const float PIE = 3.0; float API = PIE;\n", false},
+  };
+  for (const auto& c : cases) EXPECT_EQ(declaresName(c.code, "PI"), c.declares) << c.code;
+}
+
+// A minimal program around a BRDFA Engine render() file.
+constexpr const char* kRenderIntegrator =
+    "layout(local_size_x = 1) in;\n"
+    "layout(std430, set = 0, binding = 0) buffer O { vec4 o; };\n"
+    "void main() {\n"
+    "  o = vec4(render(vec3(0, 0, 1), vec3(0, 0, 1), vec3(0, 0, 1), vec2(0.0), mat3(1.0)), 1.0);\n"
+    "}\n";
+
+std::string renderFile(const std::string& before, const std::string& body) {
+  return before + "vec3 render(vec3 L, vec3 N, vec3 V, vec2 textureCord, mat3 worldToLocal) {\n  " + body + "\n}\n";
+}
+
+// The engine's host shader defined PI and LI before the file's text (program_assembler.cpp):
+// a legacy file sees them, for its text only.
+TEST_F(Assembly, LegacyFileSeesTheEnginesPiAndLi) {
+  brdf.format = BrdfFormat::Legacy;
+  brdf.params.clear();
+  brdf.shader = renderFile("", "return vec3(LI * dot(N, L) / PI);");
+  const std::string src = assembleProgram(spec).source;
+  auto at = [&](const char* text) {
+    const size_t i = src.find(text);
+    EXPECT_NE(i, std::string::npos) << text << " in\n" << src;
+    return i;
+  };
+  // In the generated region after the file's inputs, so its line numbers are untouched; gone
+  // before the integrator's code.
+  const size_t user = at("#line 7 1\nvec3 render(");
+  for (const char* define : {"#define PI 3.14159265359\n", "#define LI 8.\n"}) {
+    EXPECT_LT(at("// user chunk"), at(define)) << define;
+    EXPECT_LT(at(define), user) << define;
+  }
+  for (const char* undef : {"#undef PI\n", "#undef LI\n"}) {
+    EXPECT_LT(user, at(undef)) << undef;
+    EXPECT_LT(at(undef), at("// chunk A")) << undef;
+  }
+
+  spec.integrator = kRenderIntegrator;
+  Result<SpirvBinary> r = compileGlsl(ShaderStage::Compute, assembleProgram(spec).source);
+  EXPECT_TRUE(r.ok()) << (r.ok() ? "" : r.error().message);
+
+  // Files in the native format never see them.
+  brdf.format = BrdfFormat::Explorer;
+  brdf.shader = "vec3 BRDF(vec3 L, vec3 V, vec3 N, vec3 X, vec3 Y) { return vec3(1.0); }\n";
+  const std::string native = assembleProgram(spec).source;
+  EXPECT_EQ(native.find("#define PI"), std::string::npos) << native;
+  EXPECT_EQ(native.find("#define LI"), std::string::npos) << native;
+}
+
+// The engine appended the file to its own `#define PI 3.14159265359`: an identical #define
+// compiled there, a different one or a `const float PI` did not. Here all of them compile,
+// with the file's own meaning where it gives one, and a file's error keeps its line.
+TEST_F(Assembly, LegacyFilesWithTheirOwnPiOrLiCompile) {
+  brdf.format = BrdfFormat::Legacy;
+  brdf.params.clear();
+  brdf.shaderFirstLine = 1;
+  spec.integrator = kRenderIntegrator;
+  const struct {
+    const char* before;
+    const char* body;
+    bool enginePi, engineLi;  // whether the engine's definitions are emitted
+  } cases[] = {
+      {"", "return vec3(PI, LI, 0.0);", true, true},
+      {"#define PI 3.14159265359\n", "return vec3(PI, LI, 0.0);", false, true},
+      {"#define PI 3.0\n", "return vec3(PI, LI, 0.0);", false, true},
+      {"  # define PI (3.0)\n#define LI 2.0\n", "return vec3(PI, LI, 0.0);", false, false},
+      {"const float PI = 3.0;\n", "return vec3(PI, LI, 0.0);", false, true},
+      {"#undef PI\nconst float PI = 3.0;\n", "return vec3(PI);", false, true},
+      {"const vec3 LI = vec3(2.0);\n", "return LI * PI;", true, false},
+      {"", "float PI = 3.0; return vec3(PI);", false, true},
+      {"", "return vec3(1.0);", true, true},  // unused: harmless
+  };
+  for (const auto& c : cases) {
+    brdf.shader = renderFile(c.before, c.body);
+    const std::string src = assembleProgram(spec).source;
+    const size_t user = src.find("#line 1 1\n");  // the file's own text starts there
+    ASSERT_NE(user, std::string::npos) << src;
+    EXPECT_EQ(src.find("#define PI 3.14159265359\n") < user, c.enginePi) << src;
+    EXPECT_EQ(src.find("#define LI 8.\n") < user, c.engineLi) << src;
+    Result<SpirvBinary> r = compileGlsl(ShaderStage::Compute, src);
+    EXPECT_TRUE(r.ok()) << c.before << c.body << ": " << (r.ok() ? "" : r.error().message);
+  }
+
+  // Only the file's own text counts against it: an error after the emitted lines names its line.
+  brdf.shader = renderFile("const float PI = 3.0;\n", "return vec3(PI) + ;");
+  Result<SpirvBinary> bad = compileGlsl(ShaderStage::Compute, assembleProgram(spec).source);
+  ASSERT_FALSE(bad.ok());
+  ASSERT_FALSE(bad.error().diagnostics.empty());
+  EXPECT_EQ(bad.error().diagnostics.front().line, 3) << bad.error().diagnostics.front().message;
 }
 
 TEST(AssemblyNoBrdf, StillProducesAProgram) {

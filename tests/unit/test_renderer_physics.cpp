@@ -185,6 +185,61 @@ std::string engineStyleFile(const std::string& before, const std::string& body) 
   return before + "vec3 render(vec3 L, vec3 N, vec3 V, vec2 textureCord, mat3 worldToLocal){\n\t" + body + "\n}\n";
 }
 
+// Issue 13: a file in the engine's style may use the PI and LI of the engine's host shader
+// without defining them (`#define PI 3.14159265359`, `#define LI 8.`), and renders as the engine
+// rendered it: the plain average of render() over uniform directions.
+TEST_F(RendererPhysics, LegacyFileUsingTheEnginesPiAndLiRendersAsTheEngineWould) {
+  const double pi = 3.14159265358979323846;
+  const struct {
+    const char* body;
+    int spp;
+    double expected, tolerance;
+  } cases[] = {
+      // The engine's values themselves (a constant render() averages to itself).
+      {"return vec3(PI);", 16, 3.14159265359, 1e-5},
+      {"return vec3(LI);", 16, 8.0, 1e-5},
+      // A Lambertian written as the engine's files are, in the furnace: the mean of
+      // cos / PI over uniform directions, 1 / (2 pi) (no 2 pi for the uniform pdf), to 1%
+      // (measured: 0.02%).
+      {"return texture(skybox, L).rgb * max(dot(N, L), 0.) / PI;", 256, 1.0 / (2.0 * pi), 0.0016},
+      // Lit at the engine's light intensity: LI / (2 pi) = 4 / pi, to 1%.
+      {"return LI * texture(skybox, L).rgb * max(dot(N, L), 0.) / PI;", 256, 4.0 / pi, 0.0127},
+  };
+  for (const auto& c : cases) {
+    std::vector<Vec3> px = legacyFurnacePixels(engineStyleFile("", c.body), c.spp);
+    ASSERT_GT(px.size(), 300u) << c.body;
+    double sum = 0;
+    for (const Vec3& v : px) {
+      EXPECT_EQ(v[0], v[1]) << c.body;
+      EXPECT_EQ(v[0], v[2]) << c.body;
+      sum += v[0];
+    }
+    EXPECT_NEAR(sum / px.size(), c.expected, c.tolerance) << c.body;
+  }
+}
+
+// A file that gives PI or LI a meaning of its own (the engine rejected all but an identical
+// #define) compiles and renders with its own value.
+TEST_F(RendererPhysics, LegacyFileWithItsOwnPiOrLiUsesItsOwn) {
+  const struct {
+    const char* before;
+    const char* body;
+    float expected;
+  } cases[] = {
+      {"#define PI 3.14159265359\n", "return vec3(PI);", 3.14159265359f},
+      {"#define PI 3.0\n", "return vec3(PI);", 3.0f},
+      {"const float PI = 3.0;\n", "return vec3(PI);", 3.0f},
+      {"#undef PI\nconst float PI = 2.5;\n", "return vec3(PI);", 2.5f},
+      {"const float LI = 2.0;\n", "return vec3(LI + PI);", 2.0f + 3.14159265359f},
+      {"", "float LI = 0.5; return vec3(LI * PI);", 0.5f * 3.14159265359f},
+  };
+  for (const auto& c : cases) {
+    std::vector<Vec3> px = legacyFurnacePixels(engineStyleFile(c.before, c.body), 16);
+    ASSERT_GT(px.size(), 300u) << c.before << c.body;
+    for (const Vec3& v : px) ASSERT_NEAR(v[0], c.expected, 1e-5f) << c.before << c.body;
+  }
+}
+
 // worldToLocal as the engine built it (shaders/kernels/shade.comp.glsl): rows T, N, B with
 // T = normalize(cross(V, N)) and B = normalize(cross(T, N)), so N is its second row. Every pixel
 // of the sphere has another normal, almost all of them off the axes.
