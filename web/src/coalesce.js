@@ -22,5 +22,6 @@ export function coalesce(send, merge = (older, newer) => newer) {
     if (!busy) pump();
   };
   push.idle = () => !busy && !has;
+  push.waiting = () => has;   // a newer value waits: the answer to this one is already stale
   return push;
 }

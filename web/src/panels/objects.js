@@ -38,7 +38,10 @@ export function mountObjects(el) {
 
   const send = coalesce(async (patch) => {
     try {
-      set({ scene: await api.patchScene(state.session, patch) });
+      const scene = await api.patchScene(state.session, patch);
+      // With a newer edit waiting, this answer lacks it: keep the local scene that has it (the
+      // next edit builds on it), and take the answer to the newer one instead.
+      if (!send.waiting()) set({ scene });
       if (status.classList.contains('error')) { status.textContent = ''; status.classList.remove('error'); }
     } catch (e) {
       status.textContent = e.message;
