@@ -8,12 +8,9 @@ import { state, set, on } from '../state.js';
 import { coalesce } from '../coalesce.js';
 import { refreshAssets } from '../library.js';
 import { backOff, backOffToFit, centreOn } from '../camera-math.js';
+import { boundingSphere } from '../mesh-bounds.js';
 
 const MAX_TEXTURES = 4;
-// Bounding radius of each built-in mesh at scale 1 (renderer/src/meshes.cpp: the teapot is
-// scaled to radius 1, the cube and plane span -1..1); an upload's is not known here.
-const MESH_RADIUS = { sphere: 1, dense_sphere: 1, torus: 1, teapot: 1, plane: Math.SQRT2, cube: Math.sqrt(3) };
-const UPLOAD_RADIUS = 1.75;
 const texName = (t) => (typeof t === 'string' ? t : t?.name);
 
 export function mountObjects(el) {
@@ -111,10 +108,7 @@ export function mountObjects(el) {
     // Beside the selected object, which may put it outside the view: if so, the camera (same
     // direction) centres the objects and backs off until every one is in the frame.
     const cam = state.scene.camera;
-    const spheres = all.map((o) => ({
-      center: o.translate || [0, 0, 0],
-      radius: (MESH_RADIUS[o.mesh] || UPLOAD_RADIUS) * Math.max(...(o.scale || [1, 1, 1])),
-    }));
+    const spheres = all.map(boundingSphere);
     const aspect = state.scene.render.width / state.scene.render.height;
     const patch = { objects: all };
     if (backOffToFit(cam, spheres, aspect) > 0) {
