@@ -25,7 +25,7 @@ visibility();
 
 mountSessionPanel($('session'));
 mountViewer($('viewer'));
-mountCamera($('viewer'), $('camera'));
+mountCamera($('viewer'), $('camera'), document.querySelector('.view-bar'));
 mountLog($('log'));
 mountParams($('params'));
 mountTabs(document.querySelector('.tabs'));

@@ -1,23 +1,37 @@
-// Camera: W/A/S/D/Q/E move (forward, left, back, right, up, down) while the view has focus or
-// nothing editable does; left-drag on the view looks around; the wheel changes the field of
-// view; a small form edits position, yaw, pitch, fov and both speeds. Changes PATCH the scene's
-// `camera` (one request in flight, latest value wins: coalesce.js).
+// Camera: two modes for the mouse (the bar under the view switches them). Orbit, the default:
+// left-drag turns the camera about the selected object's centre, the wheel changes the distance
+// to it (within limits). First person: left-drag looks around, the wheel changes the field of
+// view. In both, W/A/S/D/Q/E move (forward, left, back, right, up, down) while the view has
+// focus or nothing editable does. "Frame object" aims at the selected object from a distance at
+// which it fills the view; "Reset view" asks the server for its default camera. A small form
+// edits position, yaw, pitch, fov and both speeds. Changes PATCH the scene's `camera` (one
+// request in flight, latest value wins: coalesce.js); the maths is camera-math.js.
 import * as api from '../api.js';
 import { state, set, on } from '../state.js';
 import { coalesce } from '../coalesce.js';
-import { move, clamp, MAX_PITCH } from '../camera-math.js';
+import { move, clamp, MAX_PITCH, orbit, dolly, orbitLimits, frameSphere } from '../camera-math.js';
+import { boundingSphere } from '../mesh-bounds.js';
 
 const MOVE_KEYS = new Set(['w', 'a', 's', 'd', 'q', 'e']);
 
-export function mountCamera(viewEl, formEl) {
+const HINTS = {
+  orbit: 'drag: orbit the selected object · wheel: distance · W/A/S/D/Q/E move',
+  fly: 'drag: look around · wheel: field of view · W/A/S/D/Q/E move',
+};
+
+export function mountCamera(viewEl, formEl, barEl) {
   let cam = null;               // our copy; the source of truth while the user drives it
+  let mode = 'orbit';           // 'orbit' | 'fly' (first person)
   const held = new Set();
   let lastTick = 0;
   let dragging = false;
 
+  // `null` resets: a merge patch that removes `camera` gives the scene its default camera.
   const send = coalesce(async (camera) => {
     try {
-      set({ scene: await api.patchScene(state.session, { camera }) });
+      const scene = await api.patchScene(state.session, { camera });
+      set({ scene });
+      if (camera === null) { cam = structuredClone(scene.camera); showForm(); }
     } catch (e) {
       set({ status: `camera: ${e.message}` });
     }
@@ -56,7 +70,9 @@ export function mountCamera(viewEl, formEl) {
     requestAnimationFrame(tick);
   }
 
-  // ---- mouse: left-drag looks, wheel zooms ----
+  // ---- mouse: left-drag orbits or looks, the wheel changes the distance or the field of view ----
+  const target = () => boundingSphere(state.scene?.objects?.[state.selected]);
+  const aspect = () => (state.scene ? state.scene.render.width / state.scene.render.height : 1);
   viewEl.addEventListener('pointerdown', (ev) => {
     if (ev.button !== 0 || !cam) return;
     dragging = true;
@@ -65,9 +81,16 @@ export function mountCamera(viewEl, formEl) {
   });
   viewEl.addEventListener('pointermove', (ev) => {
     if (!dragging || (!ev.movementX && !ev.movementY)) return;
-    // Drag right looks right (yaw decreases: +yaw turns toward -X); drag up looks up.
-    cam.yaw -= ev.movementX * state.speeds.look;
-    cam.pitch = clamp(cam.pitch - ev.movementY * state.speeds.look, -MAX_PITCH, MAX_PITCH);
+    // Drag right: yaw decreases (+yaw turns toward -X), so first person looks right and the
+    // orbit carries the camera to the left, turning the object's near side the way the mouse
+    // went. Drag up: pitch increases (first person looks up; the orbit goes below the object).
+    const dYaw = -ev.movementX * state.speeds.look, dPitch = -ev.movementY * state.speeds.look;
+    if (mode === 'orbit') {
+      cam = orbit(cam, target().center, dYaw, dPitch);
+    } else {
+      cam.yaw += dYaw;
+      cam.pitch = clamp(cam.pitch + dPitch, -MAX_PITCH, MAX_PITCH);
+    }
     changed();
   });
   const stop = () => { dragging = false; };
@@ -76,9 +99,30 @@ export function mountCamera(viewEl, formEl) {
   viewEl.addEventListener('wheel', (ev) => {
     if (!cam) return;
     ev.preventDefault();
-    cam.fov = clamp(cam.fov * Math.exp(ev.deltaY * 0.001), 5, 120);   // multiplicative: even steps
+    const factor = Math.exp(ev.deltaY * 0.001);   // multiplicative: even steps
+    if (mode === 'orbit') {
+      const sphere = target();
+      cam = dolly(cam, sphere.center, factor, orbitLimits(sphere, cam.fov, aspect()));
+    } else {
+      cam.fov = clamp(cam.fov * factor, 5, 120);
+    }
     changed();
   }, { passive: false });
+
+  // ---- the bar under the view: mode, Frame object, Reset view ----
+  const modeButtons = [...barEl.querySelectorAll('[data-mode]')];
+  const showMode = () => {
+    for (const b of modeButtons) b.setAttribute('aria-pressed', String(b.dataset.mode === mode));
+    viewEl.title = HINTS[mode];
+  };
+  for (const b of modeButtons) b.addEventListener('click', () => { mode = b.dataset.mode; showMode(); });
+  showMode();
+  barEl.querySelector('.view-frame').addEventListener('click', () => {
+    if (!cam || !state.scene?.objects?.length) return;
+    cam = frameSphere(cam, target(), aspect());
+    changed();
+  });
+  barEl.querySelector('.view-reset').addEventListener('click', () => send(null));
 
   // ---- form ----
   const input = (name) => formEl.querySelector(`[name="${name}"]`);
