@@ -44,7 +44,9 @@ export function mountParams(el) {
       const row = document.createElement('label');
       row.className = 'param';
       const name = document.createElement('span');
+      name.className = 'param-name';
       name.textContent = decl.name;
+      name.title = decl.name;   // the whole name, where a narrow panel cuts it short
       const input = document.createElement('input');
       input.name = decl.name;
       if (decl.type === 'float') {
