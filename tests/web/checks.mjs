@@ -1,12 +1,13 @@
 // The browser checks, in order; each may rely on what the earlier ones set up in `env`
-// (env.page, env.sid, ...). A check throws to fail. See run.mjs for how they are run.
+// (env.page, env.sid, ...). A check throws to fail. See run.mjs for how they are run. The
+// helpers marked `export` serve the other check modules too (layout.mjs).
 import assert from 'node:assert/strict';
 import { join } from 'node:path';
 
-const sleep = (ms) => new Promise((r) => setTimeout(r, ms));
+export const sleep = (ms) => new Promise((r) => setTimeout(r, ms));
 
 // JSON in and out; a `type` sends `body` as it is (a .brdf text).
-async function http(env, method, path, body, type) {
+export async function http(env, method, path, body, type) {
   const res = await fetch(env.server.url + path, {
     method,
     headers: body === undefined ? {} : { 'Content-Type': type || 'application/json' },
@@ -17,7 +18,7 @@ async function http(env, method, path, body, type) {
   return text ? JSON.parse(text) : null;
 }
 
-async function until(what, fn, timeout = 20000) {
+export async function until(what, fn, timeout = 20000) {
   const end = Date.now() + timeout;
   for (;;) {
     const v = await fn();
@@ -44,12 +45,12 @@ async function openTab(env, label) {
 // Analysis needs frames that stop changing: a low sample cap makes a session converge in a few
 // passes, after which the stream sends nothing new until the scene changes. Set over the API,
 // not the UI, which never sends `render` (so it does not undo it).
-async function capSamples(env, sid) {
+export async function capSamples(env, sid) {
   await http(env, 'PATCH', `/api/sessions/${sid}/scene`, { render: { max_samples: 16 } });
 }
 
 /** Waits until the session is done (max_samples reached) and the frame on screen is its final one. */
-async function settle(env, page, sid) {
+export async function settle(env, page, sid) {
   await until('rendering done', async () => (await http(env, 'GET', `/api/sessions/${sid}/stats`)).done);
   let prev = await env.grab(page);
   return until('a stable frame', async () => {
@@ -63,7 +64,7 @@ async function settle(env, page, sid) {
 
 /** A world point in normalized device coordinates of the scene's camera (renderer convention:
  *  yaw about +Y with 0 looking down -Z, pitch up; fov vertical). z: depth along the view. */
-function project(camera, point, aspect) {
+export function project(camera, point, aspect) {
   const y = (camera.yaw * Math.PI) / 180, p = (camera.pitch * Math.PI) / 180;
   const f = [-Math.sin(y) * Math.cos(p), Math.sin(p), -Math.cos(y) * Math.cos(p)];
   const r = [Math.cos(y), 0, -Math.sin(y)];

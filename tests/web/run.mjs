@@ -11,6 +11,7 @@ import { execFileSync } from 'node:child_process';
 import { startServer } from './server.mjs';
 import { grab, variance, meanDiff, waitForFrame } from './frames.mjs';
 import { checks } from './checks.mjs';
+import { layoutChecks } from './layout.mjs';
 
 const CHROMIUM = process.env.BRDFA_CHROMIUM || '/usr/bin/chromium';
 
@@ -49,7 +50,7 @@ async function main() {
   try {
     const context = await browser.newContext({ viewport: { width: 1280, height: 720 } });
     const env = { server, context, artifacts: opt.artifacts, grab, variance, meanDiff, waitForFrame };
-    for (const [name, fn] of checks) {
+    for (const [name, fn] of [...checks, ...layoutChecks]) {
       const t = Date.now();
       try {
         await fn(env);
