@@ -23,10 +23,15 @@ async function request(method, path, { json, text, form } = {}) {
   }
   const res = await fetch(path, init);
   if (res.status === 204) return null;
-  const type = res.headers.get('Content-Type') || '';
-  const body = type.includes('application/json') ? await res.json() : await res.text();
-  if (!res.ok) throw new ApiError(res.status, typeof body === 'object' ? body : { message: body });
-  return body;
+  if (!res.ok) throw await apiError(res);
+  return readBody(res);
+}
+
+const readBody = (res) => ((res.headers.get('Content-Type') || '').includes('application/json') ? res.json() : res.text());
+
+async function apiError(res) {
+  const body = await readBody(res);
+  return new ApiError(res.status, typeof body === 'object' ? body : { message: body });
 }
 
 const seg = encodeURIComponent;
@@ -69,14 +74,41 @@ export const uploadAsset = (file, kind = '') => {
 export const createSession = (scene) => request('POST', '/api/sessions', scene === undefined ? {} : { json: scene });
 /** 200 {id, stats, stream_clients, scene}; 404 when the server forgot it (restart). */
 export const getSession = (session) => request('GET', `/api/sessions/${seg(session)}`);
+/** 204. With `keepalive` the request outlives the page (unload: sendBeacon cannot DELETE). */
+export const deleteSession = (session, { keepalive = false } = {}) =>
+  keepalive ? fetch(`/api/sessions/${seg(session)}`, { method: 'DELETE', keepalive: true }).catch(() => {})
+    : request('DELETE', `/api/sessions/${seg(session)}`);
 
 export const getScene = (session) => request('GET', `/api/sessions/${seg(session)}/scene`);
 /** RFC 7386 merge patch; arrays (objects) are replaced whole. Answers the full scene. */
 export const patchScene = (session, patch) => request('PATCH', `/api/sessions/${seg(session)}/scene`, { json: patch });
+/** Replaces the whole scene; answers it complete. */
+export const putScene = (session, scene) => request('PUT', `/api/sessions/${seg(session)}/scene`, { json: scene });
 export const getStats = (session) => request('GET', `/api/sessions/${seg(session)}/stats`);
 /** rel_error against render time since the last restart, with the log-log fit (docs/api.md). */
 export const getConvergence = (session, maxPoints = 400) =>
   request('GET', `/api/sessions/${seg(session)}/convergence?max_points=${maxPoints}`);
+
+// Analysis plots: kind is polar, lobe, albedo or slice; body {series: [{brdf, params, label}], ...}.
+export const analysis = (kind, body) => request('POST', `/api/analysis/${seg(kind)}`, { json: body });
+
+/**
+ * The difference of two sessions' latest frames (A - B): the PNG on its diverging colour map as
+ * a Blob, with the figures its headers carry. Same errors as request() (400 while a view has no
+ * error estimate yet).
+ */
+export async function getDifference(a, b) {
+  const res = await fetch(`/api/sessions/${seg(a)}/difference?against=${seg(b)}`);
+  if (!res.ok) throw await apiError(res);
+  const num = (h) => { const v = res.headers.get(h); return v == null ? null : Number(v); };
+  return {
+    image: await res.blob(),
+    range: num('X-Difference-Range'),
+    relRms: num('X-Rel-RMS'),
+    relRmsError: num('X-Rel-RMS-Error'),
+    samples: (res.headers.get('X-Samples') || '').split(',').map(Number),
+  };
+}
 
 /** URL for an <img>: multipart/x-mixed-replace PNG stream. `nonce` forces a reconnect. */
 export const streamUrl = (session, nonce = 0) => `/api/sessions/${seg(session)}/stream?n=${nonce}`;
