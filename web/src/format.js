@@ -10,3 +10,9 @@ export const errPct = (x) => {
 };
 export const fixed = (x, digits = 1) => (x == null || !Number.isFinite(x) ? 'n/a' : x.toFixed(digits));
 export const seconds = (ms) => (ms == null ? 'n/a' : `${(ms / 1000).toFixed(1)} s`);
+/** Two significant digits, in exponent form outside 0.01..10^4: plot labels. */
+export const sig = (x) => {
+  if (x == null || !Number.isFinite(x)) return 'n/a';
+  const a = Math.abs(x);
+  return a !== 0 && (a < 0.01 || a >= 1e4) ? x.toExponential(1) : String(Number(x.toPrecision(2)));
+};

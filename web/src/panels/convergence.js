@@ -5,20 +5,9 @@
 import * as api from '../api.js';
 import { state, on } from '../state.js';
 import { errPct, seconds } from '../format.js';
+import { loadUplot } from '../uplot.js';
 
 const JOB_POLL_MS = 500;
-let uplot = null;   // Promise of the uPlot class
-
-function loadUplot() {
-  if (!uplot) {
-    const link = document.createElement('link');
-    link.rel = 'stylesheet';
-    link.href = 'dist/uplot.css';   // bundled by build.mjs from the npm package
-    document.head.append(link);
-    uplot = import('uplot').then((m) => m.default);
-  }
-  return uplot;
-}
 
 /** [seconds, rel_error, fit] columns of the points with both > 0 (log axes). */
 function columns(conv) {
