@@ -17,6 +17,7 @@ import { mountTests } from './panels/tests.js';
 import { mountFrameSaver } from './panels/frame-saver.js';
 import { mountObjects } from './panels/objects.js';
 import { mountEnvironment } from './panels/environment.js';
+import { mountAnalysis } from './panels/analysis.js';
 import { refreshLibrary, refreshAssets } from './library.js';
 
 const $ = (id) => document.getElementById(id);
@@ -36,6 +37,7 @@ mountFrameSaver($('frame-saver'));
 mountObjects($('objects'));
 mountEnvironment($('environment'));
 mountConvergence($('convergence'));
+mountAnalysis($('analysis'));
 const firstFrame = new Promise((resolve) => { on('firstFrame', resolve); setTimeout(resolve, 1500); });
 const editor = firstFrame.then(() => import('./panels/editor.js')).then((m) => m.mountEditor($('editor'), $('library')));
 
