@@ -18,6 +18,7 @@ import { mountFrameSaver } from './panels/frame-saver.js';
 import { mountObjects } from './panels/objects.js';
 import { mountEnvironment } from './panels/environment.js';
 import { mountAnalysis } from './panels/analysis.js';
+import { mountCompare } from './panels/compare.js';
 import { refreshLibrary, refreshAssets } from './library.js';
 
 const $ = (id) => document.getElementById(id);
@@ -38,6 +39,7 @@ mountObjects($('objects'));
 mountEnvironment($('environment'));
 mountConvergence($('convergence'));
 mountAnalysis($('analysis'));
+mountCompare($('compare'));
 const firstFrame = new Promise((resolve) => { on('firstFrame', resolve); setTimeout(resolve, 1500); });
 const editor = firstFrame.then(() => import('./panels/editor.js')).then((m) => m.mountEditor($('editor'), $('library')));
 
