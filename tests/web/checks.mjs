@@ -29,7 +29,7 @@ export async function until(what, fn, timeout = 20000) {
 }
 
 /** Opens the UI in a new tab, records console errors, waits for a non-blank frame. */
-async function openTab(env, label) {
+export async function openTab(env, label) {
   const page = await env.context.newPage();
   page.errors = [];
   page.on('console', (m) => { if (m.type() === 'error') page.errors.push(`${label} console: ${m.text()}`); });
@@ -75,7 +75,7 @@ export function project(camera, point, aspect) {
   return { x: dot(d, r) / (z * t * aspect), y: dot(d, u) / (z * t), z };
 }
 
-const shot = (env, page, name) => page.screenshot({ path: join(env.artifacts, `${name}.png`) });
+export const shot = (env, page, name) => page.screenshot({ path: join(env.artifacts, `${name}.png`) });
 const compiles = async (env) => (await http(env, 'GET', '/api/health')).compiler.glsl_compiles;
 
 /** Sets a parameter slider as a drag does (an `input` event) and times it to the new frame. */

@@ -12,6 +12,7 @@ import { startServer } from './server.mjs';
 import { grab, variance, meanDiff, waitForFrame } from './frames.mjs';
 import { checks } from './checks.mjs';
 import { layoutChecks } from './layout.mjs';
+import { analysisChecks } from './analysis.mjs';
 
 const CHROMIUM = process.env.BRDFA_CHROMIUM || '/usr/bin/chromium';
 
@@ -50,7 +51,7 @@ async function main() {
   try {
     const context = await browser.newContext({ viewport: { width: 1280, height: 720 } });
     const env = { server, context, artifacts: opt.artifacts, grab, variance, meanDiff, waitForFrame };
-    for (const [name, fn] of [...checks, ...layoutChecks]) {
+    for (const [name, fn] of [...checks, ...layoutChecks, ...analysisChecks]) {
       const t = Date.now();
       try {
         await fn(env);
