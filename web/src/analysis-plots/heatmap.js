@@ -5,15 +5,26 @@ import { sig } from '../format.js';
 
 const finite = (v) => v != null && Number.isFinite(v);
 
-/** {lo, hi, log} over the grid's values (positive ones for log), or null when there are none. */
-export function valueScale(grid, log, decades = 4) {
+/**
+ * {lo, hi, log, over} over the grid's values (positive ones for log), or null when there are
+ * none. Cells for which skip(row, col) holds do not set the range (they saturate when outside
+ * it); `over` says whether any value lies above hi.
+ */
+export function valueScale(grid, log, decades = 4, skip = () => false) {
   let lo = Infinity;
   let hi = -Infinity;
-  for (const row of grid) for (const v of row) if (finite(v) && (!log || v > 0)) { lo = Math.min(lo, v); hi = Math.max(hi, v); }
+  let top = -Infinity;
+  grid.forEach((row, r) => row.forEach((v, c) => {
+    if (!finite(v) || (log && v <= 0)) return;
+    top = Math.max(top, v);
+    if (skip(r, c)) return;
+    lo = Math.min(lo, v);
+    hi = Math.max(hi, v);
+  }));
   if (!(hi >= lo)) return null;
   if (log) lo = Math.max(lo, hi * 10 ** -decades);
   if (hi === lo) hi = log ? lo * 10 : lo + (Math.abs(lo) || 1);   // a constant grid still gets a bar
-  return { lo, hi, log };
+  return { lo, hi, log, over: top > hi };
 }
 
 /** Where v falls on the scale, 0..1 (clamped). */
@@ -22,15 +33,17 @@ export function position({ lo, hi, log }, v) {
   return Math.min(1, Math.max(0, p));
 }
 
-/** Tick marks of a colour bar: its ends and middle, or each decade of a log scale. */
+/** Tick marks of a colour bar: its ends and middle, or each decade of a log scale; the top one says "≥" when values saturate. */
 export function scaleTicks(scale) {
-  const { lo, hi, log } = scale;
+  const { lo, hi, log, over } = scale;
+  let values = [lo, log ? Math.sqrt(lo * hi) : (lo + hi) / 2, hi];
   if (log) {
-    const out = [];
-    for (let e = Math.ceil(Math.log10(lo)); e <= Math.floor(Math.log10(hi)); ++e) out.push(10 ** e);
-    if (out.length >= 2) return out.map((v) => ({ pos: position(scale, v), label: sig(v) }));
+    const decades = [];
+    for (let e = Math.ceil(Math.log10(lo)); e <= Math.floor(Math.log10(hi)); ++e) decades.push(10 ** e);
+    if (decades.length >= 2) values = decades;
   }
-  return [lo, log ? Math.sqrt(lo * hi) : (lo + hi) / 2, hi].map((v) => ({ pos: position(scale, v), label: sig(v) }));
+  const ticks = values.map((v) => ({ pos: position(scale, v), label: sig(v) }));
+  return over ? [...ticks.filter((t) => t.pos < 0.9), { pos: 1, label: `≥ ${sig(hi)}` }] : ticks;
 }
 
 /** grid[row][col] into rect {x, y, w, h} of g: column 0 on the left, row 0 at the bottom; null cells stay empty. */

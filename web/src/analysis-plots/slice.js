@@ -36,7 +36,11 @@ export function drawSlice(canvas, slice, { log, thetaI }) {
   canvas.dataset.drawn = '0';
   if (!series) return;
   const grid = series.values.map((row) => row.map(luminance));
-  const scale = valueScale(grid, log);
+  const hs = slice.axes.theta_h_deg;
+  const ds = slice.axes.theta_d_deg;
+  // The edges at 90 degrees put L or V on the horizon, where many BRDFs are singular (a 1 / N.L
+  // of cos(pi/2) ~ 6e-17 in floating point): they do not set the colour range, they saturate.
+  const scale = valueScale(grid, log, 4, (d, h) => ds[d] >= 90 || hs[h] >= 90);
   const side = Math.min(HEIGHT - 36, width - 40 - 80);
   const map = { x: 40, y: 8, w: side, h: side };
   if (!scale) { g.fillText('no values to show (all zero or below the horizon)', map.x, map.y + 20); return; }
@@ -44,8 +48,6 @@ export function drawSlice(canvas, slice, { log, thetaI }) {
   drawColourBar(g, { x: map.x + side + 12, y: map.y, w: 12, h: side }, sequential, scaleTicks(scale));
 
   // Axes: theta_h across, theta_d up, both 0..90 degrees.
-  const hs = slice.axes.theta_h_deg;
-  const ds = slice.axes.theta_d_deg;
   const px = (th) => map.x + ((th - hs[0]) / (hs.at(-1) - hs[0])) * map.w;
   const py = (td) => map.y + map.h - ((td - ds[0]) / (ds.at(-1) - ds[0])) * map.h;
   g.fillStyle = '#333';
