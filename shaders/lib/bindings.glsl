@@ -19,7 +19,7 @@ layout(set = 0, binding = 5) uniform samplerCube brdfa_envMap;
 layout(std430, set = 0, binding = 6) writeonly buffer BrdfaOutRgba8 { uint brdfa_outRgba8[]; };
 layout(std430, set = 0, binding = 7) writeonly buffer BrdfaOutFloat { vec4 brdfa_outFloat[]; };
 layout(std430, set = 0, binding = 8) writeonly buffer BrdfaPartials { vec4 brdfa_partials[]; };
-// The environment's importance-sampling table (renderer/src/environment_sampling.h), a texel
+// The environment's importance-sampling table (renderer/src/assets/environment_sampling.h), a texel
 // buffer of RG32UI entries: entry 0 (log2 D, effective density as float bits), then per cell
 // (alias << 13 | keep threshold, density as float bits). A constant environment binds the
 // header alone.

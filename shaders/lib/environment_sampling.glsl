@@ -1,10 +1,10 @@
 // Importance sampling of the environment (issue 11): directions in proportion to luminance
-// times solid angle, from the alias table built by renderer/src/environment_sampling.cpp.
+// times solid angle, from the alias table built by renderer/src/assets/environment_sampling.cpp.
 // Both functions work in the environment's frame (lib/environment.glsl), as lookups do.
 // A constant environment (the furnace) has no table: it is sampled uniformly over the sphere.
 
 // Direction through (s, t) of cube face `face`, not normalised (its major component is +-1):
-// the Vulkan cube convention, as cubeFaceDirection in renderer/src/environment_maps.cpp:
+// the Vulkan cube convention, as cubeFaceDirection in renderer/src/assets/environment_maps.cpp:
 //   +X (1, -t, -s)  -X (-1, -t, s)  +Y (s, 1, t)  -Y (s, -1, -t)  +Z (s, -t, 1)  -Z (-s, -t, -1).
 // Written with selects, not branches: a CPU device runs every branch of divergent code for all
 // its SIMD lanes, and neighbouring lanes draw from different faces.

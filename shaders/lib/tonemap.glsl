@@ -1,5 +1,5 @@
 // Display encoding of PNG frames: exposure, tone map, then the sRGB transfer function
-// (IEC 61966-2-1). Float outputs (PFM, EXR) never pass through here. renderer/src/host_resolve.cpp
+// (IEC 61966-2-1). Float outputs (PFM, EXR) never pass through here. renderer/src/render/host_resolve.cpp
 // computes exactly the same on the host (tests compare the two paths).
 float brdfa_srgbEncode(float c) {
   return c <= 0.0031308 ? 12.92 * c : 1.055 * pow(c, 1.0 / 2.4) - 0.055;

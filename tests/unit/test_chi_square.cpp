@@ -1,4 +1,4 @@
-// The chi-square math of the sampler check (renderer/src/chi_square.h) against closed forms and
+// The chi-square math of the sampler check (renderer/src/analysis/chi_square.h) against closed forms and
 // published table values, and the pooling rules of pbrt-v4's Chi2Test.
 #include <gtest/gtest.h>
 

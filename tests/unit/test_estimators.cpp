@@ -28,7 +28,7 @@ const SamplingMode kAllModes[] = {SamplingMode::Cosine, SamplingMode::Uniform, S
 
 double luminance(const float* rgb) { return 0.2126 * rgb[0] + 0.7152 * rgb[1] + 0.0722 * rgb[2]; }
 
-// Unit direction of equirect pixel centre (x + fx, y + fy) (mapping of renderer/src/equirect.h).
+// Unit direction of equirect pixel centre (x + fx, y + fy) (mapping of renderer/src/assets/equirect.h).
 glm::dvec3 equirectDirection(double u, double v) {
   const double phi = (u - 0.5) * 2.0 * kPi, theta = v * kPi;
   return {std::sin(theta) * std::sin(phi), std::cos(theta), -std::sin(theta) * std::cos(phi)};

@@ -1,4 +1,4 @@
-// The built-in meshes (renderer/src/meshes.h) and the frame generators (mesh_frames.h): finite,
+// The built-in meshes (renderer/src/assets/meshes.h) and the frame generators (mesh_frames.h): finite,
 // unit, orthogonal frames, outward winding, tangents along increasing u, and Newell's teapot
 // checked against the well-known facts of its original data.
 #include <gtest/gtest.h>

@@ -1,4 +1,4 @@
-// OBJ meshes from memory (renderer/src/obj_loader.h): what loads, what the loader fills in
+// OBJ meshes from memory (renderer/src/assets/obj_loader.h): what loads, what the loader fills in
 // (normals, tangents, V flip, merged shapes, triangulated polygons), and what it refuses, each
 // refusal with a message that says what is wrong.
 #include <gtest/gtest.h>

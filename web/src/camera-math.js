@@ -1,4 +1,4 @@
-// The renderer's camera convention (renderer/src/scene_math.cpp, renderer/include/brdfa/scene.h):
+// The renderer's camera convention (renderer/src/core/scene_math.cpp, renderer/include/brdfa/scene.h):
 // yaw in degrees about +Y, 0 looks down -Z; pitch in degrees, positive looks up, clamped to
 // -89..89 by the server; fov is the vertical field of view in degrees. Pure functions only: the
 // camera panel keeps the scene's camera JSON ({position, yaw, pitch, fov}) and these turn a

@@ -1,6 +1,6 @@
 // Bounding spheres of scene objects, for placing the camera (Frame object, orbit limits, a new
 // object kept in view). The server reports no mesh bounds (GET /api/assets lists ids only), so
-// the built-ins' radii at scale 1 come from renderer/src/meshes.cpp: all are centred on their
+// the built-ins' radii at scale 1 come from renderer/src/assets/meshes.cpp: all are centred on their
 // origin; the sphere, torus (0.7 + 0.3) and teapot (scaled to it) reach radius 1, the plane and
 // the cube span -1..1 (radius sqrt 2, sqrt 3). An uploaded OBJ keeps its own coordinates, which
 // the UI does not know: it is taken as centred with radius 1.75.

@@ -13,7 +13,7 @@ export function sequential(t) {
 
 const srgb8 = (c) => Math.round(255 * (c <= 0.0031308 ? 12.92 * c : 1.055 * c ** (1 / 2.4) - 0.055));
 
-/** The server's difference map (renderer/src/frame_difference.cpp): blue, white, red, linear before sRGB. */
+/** The server's difference map (renderer/src/render/frame_difference.cpp): blue, white, red, linear before sRGB. */
 export function diverging(t) {
   const s = Math.min(1, Math.max(-1, t));
   const a = Math.abs(s);

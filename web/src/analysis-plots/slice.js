@@ -9,7 +9,7 @@ import { luminance } from '../analysis-series.js';
 const HEIGHT = 215;
 const rad = (d) => (d * Math.PI) / 180;
 
-/** L's cosine to N for (theta_h, theta_d, phi_d): renderer/src/brdf_plots.cpp, L = turn(D). */
+/** L's cosine to N for (theta_h, theta_d, phi_d): renderer/src/analysis/brdf_plots.cpp, L = turn(D). */
 const lightCos = (th, td, pd) => Math.cos(rad(td)) * Math.cos(rad(th)) - Math.sin(rad(td)) * Math.cos(rad(pd)) * Math.sin(rad(th));
 
 /** Points (theta_h, theta_d) where L is at theta_i: the first crossing along theta_d per theta_h. */
