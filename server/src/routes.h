@@ -40,6 +40,20 @@ std::shared_ptr<Session> sessionOr404(Service& service, const httplib::Request& 
 // True when the session has a scene; else answers 409 no_scene.
 bool requireScene(Session& session, httplib::Response& res);
 
+// One of the shared one-shot render slots (renders and analyses queue for the device), held
+// until the guard dies. takeRenderSlot answers 503 busy (and returns false) when none frees up
+// within kRenderSlotWait or the server is stopping.
+struct RenderSlotGuard {
+  RenderSlots* slots = nullptr;
+  RenderSlotGuard() = default;
+  RenderSlotGuard(const RenderSlotGuard&) = delete;
+  RenderSlotGuard& operator=(const RenderSlotGuard&) = delete;
+  ~RenderSlotGuard() {
+    if (slots) slots->release();
+  }
+};
+bool takeRenderSlot(Service& service, httplib::Response& res, RenderSlotGuard& guard);
+
 // Headers every image response carries.
 void setFrameHeaders(httplib::Response& res, const FrameStats& stats);
 

@@ -264,13 +264,8 @@ void registerAnalysisRoutes(httplib::Server& server, Service& service) {
     if (!series) return sendError(res, series.error());
 
     // The device is shared with every session: analyses queue with the one-shot renders.
-    if (!service.renderSlots.acquire(kRenderSlotWait))
-      return sendError(res, 503, "busy",
-                       service.stopping ? "server is shutting down" : "too many renders in progress; retry later");
-    struct SlotGuard {
-      RenderSlots& slots;
-      ~SlotGuard() { slots.release(); }
-    } guard{service.renderSlots};
+    RenderSlotGuard slot;
+    if (!takeRenderSlot(service, res, slot)) return;
 
     const auto t0 = std::chrono::steady_clock::now();
     std::vector<Plot> plots;

@@ -97,6 +97,15 @@ void sendFrame(httplib::Response& res, const std::vector<uint8_t>& bytes, FrameF
   res.set_content(reinterpret_cast<const char*>(bytes.data()), bytes.size(), infoOf(format).contentType);
 }
 
+bool takeRenderSlot(Service& service, httplib::Response& res, RenderSlotGuard& guard) {
+  if (!service.renderSlots.acquire(kRenderSlotWait)) {
+    sendError(res, 503, "busy", service.stopping ? "server is shutting down" : "too many renders in progress; retry later");
+    return false;
+  }
+  guard.slots = &service.renderSlots;
+  return true;
+}
+
 void registerRenderRoutes(httplib::Server& server, Service& service) {
   server.Post("/api/render", [&service](const httplib::Request& req, httplib::Response& res) {
     auto parsed = readJsonBody(req, res);
@@ -159,13 +168,8 @@ void registerRenderRoutes(httplib::Server& server, Service& service) {
     if (!spfGiven) scene.render.samplesPerFrame = std::min(spp, kOneShotSamplesPerPass);
 
     // Bounded concurrency: renders share one device; a queue longer than the wait is refused.
-    if (!service.renderSlots.acquire(kRenderSlotWait))
-      return sendError(res, 503, "busy",
-                       service.stopping ? "server is shutting down" : "too many renders in progress; retry later");
-    struct SlotGuard {
-      RenderSlots& slots;
-      ~SlotGuard() { slots.release(); }
-    } guard{service.renderSlots};
+    RenderSlotGuard slot;
+    if (!takeRenderSlot(service, res, slot)) return;
 
     Result<std::unique_ptr<RenderView>> view = service.renderer->createView();
     if (!view) return sendError(res, view.error());

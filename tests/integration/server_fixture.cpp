@@ -73,6 +73,14 @@ httplib::Result ServerTest::patch(const std::string& path, const std::string& bo
 }
 httplib::Result ServerTest::del(const std::string& path) { return server_->client()->Delete(path); }
 
+std::string ServerTest::createSession(const nlohmann::json& scene) {
+  auto r = post("/api/sessions", scene.dump());
+  EXPECT_TRUE(r);
+  if (!r) return {};
+  EXPECT_EQ(r->status, 201) << r->body;
+  return bodyJson(r).value("id", "");
+}
+
 nlohmann::json bodyJson(const httplib::Result& r) {
   if (!r) return nullptr;
   return nlohmann::json::parse(r->body, nullptr, /*allow_exceptions=*/false);

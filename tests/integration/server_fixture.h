@@ -40,6 +40,8 @@ class ServerTest : public ::testing::Test {
                              const std::string& type = "application/json");
   static httplib::Result patch(const std::string& path, const std::string& body);
   static httplib::Result del(const std::string& path);
+  // POST /api/sessions with `scene`; the new session's id ("" after a failed expectation).
+  static std::string createSession(const nlohmann::json& scene);
 
   static std::unique_ptr<ServerProcess> server_;
   static std::string startError_;

@@ -247,13 +247,6 @@ TEST_F(Analysis, BadRequestsAreRefusedWithTheirField) {
 // difference and its relative RMS with an error bar from both estimates.
 class SideBySide : public ServerTest {
  protected:
-  static std::string createSession(const json& scene) {
-    auto r = post("/api/sessions", scene.dump());
-    EXPECT_TRUE(r);
-    if (!r) return {};
-    EXPECT_EQ(r->status, 201) << r->body;
-    return bodyJson(r).value("id", "");
-  }
   // The difference once both sessions have `spp` samples.
   static json difference(const std::string& a, const std::string& b, uint64_t spp) {
     for (const std::string& id : {a, b}) {

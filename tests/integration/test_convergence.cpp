@@ -35,15 +35,6 @@ json skyLambert(const std::string& sampling, int size, int maxSamples, const jso
 
 class Convergence : public ServerTest {
  protected:
-  // POST /api/sessions; the new session's id.
-  static std::string createSession(const json& scene) {
-    auto r = post("/api/sessions", scene.dump());
-    EXPECT_TRUE(r);
-    if (!r) return {};
-    EXPECT_EQ(r->status, 201) << r->body;
-    return bodyJson(r).value("id", "");
-  }
-
   static json getJson(const std::string& path) {
     auto r = get(path);
     EXPECT_TRUE(r) << path;

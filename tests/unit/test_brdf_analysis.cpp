@@ -5,21 +5,15 @@
 #include <cmath>
 
 #include "brdfa/renderer.h"
+#include "device_test.h"
 
 namespace brdfa {
 namespace {
 
 constexpr double kPi = 3.14159265358979323846;
 
-class BrdfAnalysis : public ::testing::Test {
+class BrdfAnalysis : public DeviceTest {
  protected:
-  static void SetUpTestSuite() {
-    RendererOptions options;
-    options.shaderDir = std::string(BRDFA_SOURCE_DIR) + "/shaders";
-    renderer_ = Renderer::create(options).value();
-  }
-  static void TearDownTestSuite() { renderer_.reset(); }
-
   static BrdfDefinition file(const std::string& body) {
     auto def = parseBrdf("analytic\n::begin parameters\nfloat k 0 1 0.5\n::end parameters\n::begin shader\n"
                          "vec3 BRDF(vec3 L, vec3 V, vec3 N, vec3 X, vec3 Y) {\n" + body + "\n}\n::end shader\n");
@@ -30,7 +24,6 @@ class BrdfAnalysis : public ::testing::Test {
     const double t = deg * kPi / 180;
     return {float(std::sin(t)), 0.0f, float(std::cos(t))};
   }
-  static inline std::shared_ptr<Renderer> renderer_;
 };
 
 // Without a sampler: the cosine + half-vector mixture. A constant f = c / pi has albedo c at
