@@ -32,6 +32,9 @@ using nlohmann::json;
 namespace wire = render_wire;
 
 constexpr uint32_t kMaxRequestBytes = 64u << 20;  // a scene with 64 objects' sources, far below
+// On a CPU device, work past this many times its budget in wall time is stopped even without
+// the CPU time to show for it (watch()).
+constexpr double kStuckFactor = 3.0;
 
 class Worker {
  public:
@@ -114,7 +117,15 @@ class Worker {
   // Reports the request whose device work overran its budget, once, and then leaves the
   // killing to the server (which restarts this process and quarantines the program). Says it
   // is alive every second meanwhile: a worker that falls silent is stopped too.
+  //
+  // On a CPU device (lavapipe) a budget is overrun only once the work has taken its wall time
+  // AND this process has spent that much CPU time since the work started (or 3x its wall time
+  // has passed, for a driver stuck without burning CPU). A machine loaded by other processes
+  // stretches wall time, not CPU time: the first pass of a new program (which carries the
+  // driver's JIT) took over 1.5 s of wall time under a load of 6-8 on two cores and got its
+  // program quarantined, while an endless loop keeps burning CPU and is caught as before.
   void watch(const RendererOptions& o) {
+    const bool cpuDevice = renderer_->device().type == "cpu";
     auto lastBeat = std::chrono::steady_clock::now();
     for (;;) {
       std::this_thread::sleep_for(std::chrono::milliseconds(50));
@@ -129,8 +140,11 @@ class Worker {
       if (auto work = device_activity::oldest()) {
         const bool build = work->kind == device_activity::Kind::PipelineBuild;
         const double budget = isCheck(work->tag) ? o.checkSeconds : build ? o.buildSeconds : o.passSeconds;
-        if (std::chrono::duration<double>(now - work->start).count() > budget)
-          event = json{{"id", work->tag}, {"kind", build ? "build" : "pass"}, {"resource", "time"}};
+        const double wall = std::chrono::duration<double>(now - work->start).count();
+        const bool overrun = !cpuDevice ? wall > budget
+                                        : (wall > budget && device_activity::processCpuSeconds() - work->cpuStart > budget) ||
+                                              wall > kStuckFactor * budget;
+        if (overrun) event = json{{"id", work->tag}, {"kind", build ? "build" : "pass"}, {"resource", "time"}};
       }
       if (event.is_null() && o.workerMemoryBytes > 0 &&
           worker_process::residentBytes(getpid()) > o.workerMemoryBytes) {

@@ -1,5 +1,7 @@
 #include "device_activity.h"
 
+#include <time.h>
+
 #include <map>
 #include <mutex>
 
@@ -15,10 +17,17 @@ thread_local uint64_t tagOfThread = 0;
 
 void setThreadTag(uint64_t tag) { tagOfThread = tag; }
 
+double processCpuSeconds() {
+  timespec t{};
+  if (clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &t) != 0) return 0;  // guard: never fails on Linux
+  return double(t.tv_sec) + 1e-9 * double(t.tv_nsec);
+}
+
 Scope::Scope(Kind kind) {
+  const double cpu = processCpuSeconds();
   std::lock_guard lock(mutex);
   key_ = nextKey++;
-  inFlight.emplace(key_, Entry{tagOfThread, kind, std::chrono::steady_clock::now()});
+  inFlight.emplace(key_, Entry{tagOfThread, kind, std::chrono::steady_clock::now(), cpu});
 }
 
 Scope::~Scope() {

@@ -20,7 +20,13 @@ struct Entry {
   uint64_t tag = 0;
   Kind kind = Kind::Submission;
   std::chrono::steady_clock::time_point start;
+  double cpuStart = 0;  // processCpuSeconds() at start
 };
+
+// CPU time this process has used so far, all threads (CLOCK_PROCESS_CPUTIME_ID), in seconds.
+// On a CPU device (lavapipe) the device's work is this process's CPU time, which a loaded
+// machine does not inflate the way it inflates wall time.
+double processCpuSeconds();
 
 // Registers the calling thread's work from construction to destruction.
 class Scope {
