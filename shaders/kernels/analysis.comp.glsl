@@ -26,7 +26,6 @@ void main() {
   vec3 V = brdfa_gbuffer[1u + j / chunks].xyz;
   vec3 sum = vec3(0.0);
   float nonFinite = 0.0;
-  uvec2 rotation = uvec2(brdfa_hash(j * 0x9e3779b9u + 0x632be5abu), brdfa_hash(j ^ 0x85ebca6bu));
-  brdfa_albedoSamples(V, rotation, 0u, perChunk, sum, nonFinite);
+  brdfa_albedoSamples(V, brdfa_albedoRotation(j), perChunk, sum, nonFinite);
   brdfa_accum[j] = vec4(sum, nonFinite);
 }

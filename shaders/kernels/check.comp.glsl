@@ -92,8 +92,7 @@ void main() {
   for (uint k = 0u; k < BRDFA_ALBEDO_CHUNKS; ++k) {
     vec3 sum = vec3(0.0);
     uint j = v * BRDFA_ALBEDO_CHUNKS + k;
-    uvec2 rotation = uvec2(brdfa_hash(j * 0x9e3779b9u + 0x632be5abu), brdfa_hash(j ^ 0x85ebca6bu));
-    brdfa_albedoSamples(V, rotation, 0u, BRDFA_ALBEDO_CHUNK_SAMPLES, sum, nonFinite);
+    brdfa_albedoSamples(V, brdfa_albedoRotation(j), BRDFA_ALBEDO_CHUNK_SAMPLES, sum, nonFinite);
     vec3 m = sum / float(BRDFA_ALBEDO_CHUNK_SAMPLES);
     chunkSum += m;
     chunkSumSq += m * m;

@@ -51,13 +51,18 @@ bool brdfa_sampleLogHalfVector(vec2 u, vec3 V, out vec3 L, out float pdf) {
   return vh > 0.0;
 }
 
+// The random shift of replicate `j`'s R2 sequence: replicates are independent estimates.
+uvec2 brdfa_albedoRotation(uint j) {
+  return uvec2(brdfa_hash(j * 0x9e3779b9u + 0x632be5abu), brdfa_hash(j ^ 0x85ebca6bu));
+}
+
 bool brdfa_albedoFinite(vec3 f) { return !any(isnan(f)) && !any(isinf(f)); }
 
-// Adds `count` samples of f cos / pdf for view V, points first .. first + count - 1 of the R2
-// sequence shifted by `rotation`. Non-finite values are counted in `nonFinite` and left out.
-void brdfa_albedoSamples(vec3 V, uvec2 rotation, uint first, uint count, inout vec3 sum, inout float nonFinite) {
+// Adds `count` samples of f cos / pdf for view V, the first `count` points of the R2 sequence
+// shifted by `rotation`. Non-finite values are counted in `nonFinite` and left out.
+void brdfa_albedoSamples(vec3 V, uvec2 rotation, uint count, inout vec3 sum, inout float nonFinite) {
   const vec3 N = vec3(0.0, 0.0, 1.0), X = vec3(1.0, 0.0, 0.0), Y = vec3(0.0, 1.0, 0.0);
-  for (uint i = first; i < first + count; ++i) {
+  for (uint i = 0u; i < count; ++i) {
     vec2 u = brdfa_sample2D(rotation, i);
     vec3 w = vec3(0.0);
 #if defined(BRDFA_HAS_SAMPLER)
