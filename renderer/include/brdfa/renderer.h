@@ -11,6 +11,7 @@
 
 #include "brdfa/assets.h"
 #include "brdfa/brdf.h"
+#include "brdfa/duration_histogram.h"
 #include "brdfa/result.h"
 #include "brdfa/scene.h"
 
@@ -172,12 +173,25 @@ struct MemoryUsage {
 // change did (or did not) compile anything.
 struct RendererCounters {
   uint64_t glslCompiles = 0;     // GLSL -> SPIR-V runs (SPIR-V cache misses)
+  uint64_t glslCompileErrors = 0;  // of those, the ones that failed (error, time or memory limit)
+  DurationHistogram compileTime;   // wall time of each of those runs
   uint64_t spirvCacheHits = 0;    // from memory
   uint64_t spirvDiskHits = 0;     // from the disk cache
   uint64_t pipelinesCreated = 0; // shading pipelines built (each costs a driver JIT)
   MemoryUsage memory;             // now, against RendererOptions::memoryBudgetBytes
   uint64_t workerRestarts = 0;    // isolated renderers: render workers killed and replaced
   uint64_t quarantinedPrograms = 0;  // isolated renderers: programs refused since (see RendererOptions)
+
+  // Adds the figures that only ever grow (compiles, cache hits, pipelines) of `other`: an
+  // isolated renderer keeps those of the workers it replaced, so they never go back.
+  void addCumulative(const RendererCounters& other) {
+    glslCompiles += other.glslCompiles;
+    glslCompileErrors += other.glslCompileErrors;
+    compileTime.merge(other.compileTime);
+    spirvCacheHits += other.spirvCacheHits;
+    spirvDiskHits += other.spirvDiskHits;
+    pipelinesCreated += other.pipelinesCreated;
+  }
 };
 
 // One property a file may claim (BrdfClaims), as checked: measured always, failed only when

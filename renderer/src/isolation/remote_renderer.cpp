@@ -244,16 +244,22 @@ class RemoteRenderer : public Renderer, public std::enable_shared_from_this<Remo
     Call c;
     c.head = json{{"op", "counters"}};
     bool live;
+    uint64_t generationAsked;
     {
       std::lock_guard lock(mutex_);
       live = alive_;
+      generationAsked = generation_;
     }
     // Health checks must answer while a replacement starts: then only the figures kept here.
     auto m = live ? const_cast<RemoteRenderer*>(this)->request(std::move(c))
                   : Result<wire::Message>(makeError(ErrorCode::DeviceError, "restarting"));
-    RendererCounters out;
-    if (m) out = wire::countersFromJson(m->head.at("value"));
+    RendererCounters worker;
+    if (m) worker = wire::countersFromJson(m->head.at("value"));
     std::lock_guard lock(mutex_);
+    // A reply from a worker replaced meanwhile is already in retiredCounters_.
+    if (m && generation_ == generationAsked) lastWorkerCounters_ = worker;
+    RendererCounters out = worker;
+    out.addCumulative(retiredCounters_);
     out.workerRestarts = restarts_;
     out.quarantinedPrograms = quarantine_.size();
     if (!m) out.memory.budget = options_.memoryBudgetBytes;
@@ -588,6 +594,9 @@ class RemoteRenderer : public Renderer, public std::enable_shared_from_this<Remo
     exited_ = false;
     ++generation_;  // replies still arriving from the old worker are dropped
     ++restarts_;
+    // Its compiles and cache hits as last read; those since that read are not counted.
+    retiredCounters_.addCumulative(lastWorkerCounters_);
+    lastWorkerCounters_ = {};
     std::string blamed = "none";
     if (culprit) {
       // Programs proven within budget by earlier work of this kind are not the cause.
@@ -651,6 +660,9 @@ class RemoteRenderer : public Renderer, public std::enable_shared_from_this<Remo
   uint64_t nextId_ = 1;
   uint64_t nextViewId_ = 1;
   uint64_t restarts_ = 0;
+  // The cumulative counters of replaced workers, and the current worker's latest reading.
+  RendererCounters retiredCounters_;
+  mutable RendererCounters lastWorkerCounters_;
   std::map<std::string, Error> quarantine_;
   std::set<std::string> built_, rendered_;
   std::map<uint64_t, Error> failedViews_;

@@ -20,8 +20,9 @@ NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(DeviceInfo, name, type, driver, apiVersion)
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(CompileInfo, warnings, compileMs, cached)
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(MemoryUsage, budget, fixed, renderTargets, assets, transfers, programs, compiles,
                                    droppedBytes, drops, lastDropped)
-NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(RendererCounters, glslCompiles, spirvCacheHits, spirvDiskHits, pipelinesCreated,
-                                   memory, workerRestarts, quarantinedPrograms)
+NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(DurationHistogram, counts, sumSec, count)
+NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(RendererCounters, glslCompiles, glslCompileErrors, compileTime, spirvCacheHits,
+                                   spirvDiskHits, pipelinesCreated, memory, workerRestarts, quarantinedPrograms)
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(BrdfCheckReport, evaluations, nanCount, infCount, negativeCount, maxAlbedo,
                                    maxAlbedoStdError, albedoAboveOne, maxReciprocityError, leftOut, worstReciprocity,
                                    firstBadValue, worstAlbedo, claims, ms)

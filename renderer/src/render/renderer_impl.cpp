@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <array>
 #include <cctype>
+#include <chrono>
 #include <cmath>
 #include <cstdlib>
 #include <cstring>
@@ -400,8 +401,13 @@ Result<std::shared_ptr<const SpirvBinary>> RendererImpl::spirv(ShaderStage stage
     return makeError(ErrorCode::NotFound, "program not in the SPIR-V cache");
   } else {
     ++glslCompiles_;
+    const auto start = std::chrono::steady_clock::now();
     auto compiled = compilePool_->compile(stage, source);
-    if (!compiled) return compiled.takeError();
+    compileTime_.add(std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
+    if (!compiled) {
+      ++glslCompileErrors_;
+      return compiled.takeError();
+    }
     diskCache_->store(key, source.size(), compiled->words);
     shared = std::make_shared<const SpirvBinary>(std::move(compiled.value()));
   }
@@ -870,7 +876,13 @@ Result<std::shared_ptr<const GpuTexture>> RendererImpl::texture(const std::strin
 }
 
 RendererCounters RendererImpl::counters() const {
-  RendererCounters c{glslCompiles_.load(), spirvCacheHits_.load(), spirvDiskHits_.load(), pipelinesCreated_.load()};
+  RendererCounters c;
+  c.glslCompiles = glslCompiles_.load();
+  c.glslCompileErrors = glslCompileErrors_.load();
+  c.compileTime = compileTime_.snapshot();
+  c.spirvCacheHits = spirvCacheHits_.load();
+  c.spirvDiskHits = spirvDiskHits_.load();
+  c.pipelinesCreated = pipelinesCreated_.load();
   c.memory = ledger_->usage();
   return c;
 }

@@ -162,7 +162,9 @@ class RendererImpl final : public Renderer, public std::enable_shared_from_this<
   std::unordered_map<uint64_t, std::shared_ptr<const ShadeKernel>> kernelCache_;
   std::deque<uint64_t> kernelOrder_;
 
-  std::atomic<uint64_t> glslCompiles_{0}, spirvCacheHits_{0}, spirvDiskHits_{0}, pipelinesCreated_{0};
+  std::atomic<uint64_t> glslCompiles_{0}, glslCompileErrors_{0}, spirvCacheHits_{0}, spirvDiskHits_{0},
+      pipelinesCreated_{0};
+  DurationRecorder compileTime_;
   std::unique_ptr<SpirvDiskCache> diskCache_;
   std::unique_ptr<CompilePool> compilePool_;  // every GLSL compile runs there
   std::set<DescriptorSlot> computeSlots_;      // the layout's slots a compute program may use
