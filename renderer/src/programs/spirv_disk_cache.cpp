@@ -1,6 +1,7 @@
 #include "spirv_disk_cache.h"
 
 #include <fcntl.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <cstdio>
@@ -63,9 +64,13 @@ std::optional<std::vector<uint32_t>> SpirvDiskCache::load(uint64_t key, uint64_t
 void SpirvDiskCache::store(uint64_t key, uint64_t sourceBytes, const std::vector<uint32_t>& words) const {
   if (dir_.empty()) return;
   const std::string target = path(key);
-  const std::string tmp = target + ".tmp." + std::to_string(::getpid());
-  int fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
+  // Unique among every process that shares the folder (replicas in containers may share a pid),
+  // so two writers of one key never write into the same temp file.
+  std::string name = target + ".tmp.XXXXXX";
+  int fd = ::mkostemp(name.data(), O_CLOEXEC);
   if (fd < 0) return;
+  ::fchmod(fd, 0644);
+  const std::string tmp = name;
   const uint64_t count = words.size();
   bool ok = writeAll(fd, kMagic, 8) && writeAll(fd, &key, 8) && writeAll(fd, &sourceBytes, 8) &&
             writeAll(fd, &count, 8) && writeAll(fd, words.data(), words.size() * 4) && ::fsync(fd) == 0;
