@@ -427,6 +427,10 @@ std::vector<std::string> AssetStore::load(const std::optional<std::vector<std::s
   // A data file without metadata: the write was interrupted before the upload was acknowledged.
   for (const fs::path& p : dataFiles) {
     if (metaIds.count(p.stem().string()) || !formatFromExtension(p.filename().string())) continue;
+    // Replicas share the folder: a young one may be another server's upload in progress.
+    std::error_code tec;
+    const auto written = fs::last_write_time(p, tec);
+    if (tec || fs::file_time_type::clock::now() - written < kTempFileAbandonedAfter) continue;
     log.push_back("warning: removing " + p.filename().string() + ": an interrupted upload (no metadata)");
     (void)removeFileDurably(p);
   }

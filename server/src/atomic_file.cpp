@@ -85,6 +85,10 @@ int removeStaleTempFiles(const fs::path& dir) {
   int removed = 0;
   for (fs::directory_iterator it(dir, ec), end; !ec && it != end; it.increment(ec)) {
     if (it->path().filename().string().rfind(kTempPrefix, 0) != 0) continue;
+    // Replicas share the folder: a young temp file may be another server's write in progress.
+    std::error_code tec;
+    const auto written = fs::last_write_time(it->path(), tec);
+    if (!tec && fs::file_time_type::clock::now() - written < kTempFileAbandonedAfter) continue;
     std::error_code rec;
     if (fs::remove(it->path(), rec)) ++removed;
   }

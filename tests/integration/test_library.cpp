@@ -185,6 +185,10 @@ TEST(Library, BrokenSavedFileIsListedWithItsErrorAndStartupGoesOn) {
   writeFile(fs::path(dir.path) / "brdfs" / "good.brdf", kLambertWhite);
   writeFile(fs::path(dir.path) / "brdfs" / "bad.brdf", "analytic\n::begin parameters\nfloat a 0 1\n");
   writeFile(fs::path(dir.path) / "brdfs" / ".tmp-good.brdf.Ab12Cd", "analytic\n::begin para");
+  // A crash long ago left it; a young one may be another replica's save in progress, and stays.
+  fs::last_write_time(fs::path(dir.path) / "brdfs" / ".tmp-good.brdf.Ab12Cd",
+                      fs::file_time_type::clock::now() - std::chrono::hours(1));
+  writeFile(fs::path(dir.path) / "brdfs" / ".tmp-other.brdf.Zz99Yy", "analytic\n::begin para");
   auto s = startOn(dir.path);
   ASSERT_TRUE(s->running());
   json list;
@@ -199,6 +203,7 @@ TEST(Library, BrokenSavedFileIsListedWithItsErrorAndStartupGoesOn) {
     }
   }
   EXPECT_FALSE(fs::exists(fs::path(dir.path) / "brdfs" / ".tmp-good.brdf.Ab12Cd")) << "stale temp file kept";
+  EXPECT_TRUE(fs::exists(fs::path(dir.path) / "brdfs" / ".tmp-other.brdf.Zz99Yy")) << "young temp file removed";
   // A scene cannot use it; a PUT fixes it.
   json body = furnaceScene("bad", json::object(), 16, 1);
   body["spp"] = 1;

@@ -2,6 +2,7 @@
 // after a crash at any moment, sees either the old complete file or the new complete file.
 #pragma once
 
+#include <chrono>
 #include <filesystem>
 #include <string_view>
 
@@ -21,7 +22,12 @@ Result<void> writeFileAtomically(const std::filesystem::path& target, std::strin
 // Unlinks `target` and fsyncs its folder. NotFound when it did not exist.
 Result<void> removeFileDurably(const std::filesystem::path& target);
 
-// Removes leftover temp files (a crash between create and rename) from `dir`; returns how many.
+// A temp file this old is a crashed write, never one in progress (a write takes milliseconds).
+inline constexpr std::chrono::minutes kTempFileAbandonedAfter{10};
+
+// Removes leftover temp files (a crash between create and rename) older than
+// kTempFileAbandonedAfter from `dir`; returns how many. Younger ones may be another replica's
+// write in progress on a shared folder.
 int removeStaleTempFiles(const std::filesystem::path& dir);
 
 }  // namespace brdfa::server
