@@ -1,6 +1,9 @@
 #include "brdfa_server/brdf_library.h"
 
+#include <sys/stat.h>
+
 #include <algorithm>
+#include <chrono>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -106,37 +109,85 @@ std::vector<std::string> BrdfLibrary::loadUserDir(const std::string& dir) {
     std::lock_guard store(storeMutex_);
     userDir_ = dir;
   }
+  std::lock_guard refresh(refreshMutex_);
+  seenDirStamp_ = directoryStamp();
+  rescanUserDirLocked(&messages);
+  return messages;
+}
+
+int64_t BrdfLibrary::directoryStamp() const {
+  struct stat st {};
+  if (userDir_.empty() || ::stat(userDir_.c_str(), &st) != 0) return -1;
+  return int64_t(st.st_mtim.tv_sec) * 1'000'000'000 + st.st_mtim.tv_nsec;
+}
+
+void BrdfLibrary::refreshUserDir() const {
+  if (userDir_.empty()) return;  // set once, before serving
+  std::lock_guard refresh(refreshMutex_);
+  const int64_t stamp = directoryStamp();
+  const int64_t now = std::chrono::duration_cast<std::chrono::nanoseconds>(
+                          std::chrono::system_clock::now().time_since_epoch()).count();
+  // A save or delete (by this server or another replica on the shared folder: a rename or an
+  // unlink) changes the folder's mtime. One in the same clock tick as the previous scan would
+  // leave it as it was, so a stamp less than a second old is never trusted.
+  if (stamp == seenDirStamp_ && now - stamp > 1'000'000'000) return;
+  seenDirStamp_ = stamp;
+  const_cast<BrdfLibrary*>(this)->rescanUserDirLocked(nullptr);
+}
+
+void BrdfLibrary::rescanUserDirLocked(std::vector<std::string>* log) {
+  std::vector<std::string> messages;
   std::map<std::string, std::shared_ptr<const BrdfEntry>, std::less<>> loaded;
   std::map<std::string, BrokenBrdf, std::less<>> broken;
-  forEachBrdfFile(dir, messages, [&](const std::string& name, const std::filesystem::path& path) {
-    if (find(name) && find(name)->builtin) {
-      messages.push_back("skipping " + path.string() + ": a built-in BRDF has that name");
-      return;
-    }
-    std::string text;
-    if (!readWholeFile(path, text)) {
-      messages.push_back("user BRDF " + path.string() + " cannot be read; listed as broken");
-      broken[name] = BrokenBrdf{name, "", makeError(ErrorCode::Internal, "cannot read " + path.string())};
-      return;
-    }
-    Result<BrdfDefinition> parsed = parseBrdf(text);
-    if (!parsed) {
-      messages.push_back("user BRDF " + path.string() + " does not parse; listed as broken: " +
-                         errorText(parsed.error()));
-      broken[name] = BrokenBrdf{name, std::move(text), parsed.takeError()};
-      return;
-    }
-    auto entry = std::make_shared<BrdfEntry>();
-    entry->name = name;
-    entry->source = std::move(text);
-    entry->definition = std::make_shared<const BrdfDefinition>(std::move(parsed.value()));
-    entry->builtin = false;
-    loaded[name] = std::move(entry);
-  });
+  std::map<std::string, std::shared_ptr<const BrdfEntry>, std::less<>> current;
+  {
+    std::lock_guard lock(mutex_);
+    current = entries_;
+  }
+  if (!forEachBrdfFile(userDir_, messages, [&](const std::string& name, const std::filesystem::path& path) {
+        auto it = current.find(name);
+        if (it != current.end() && it->second->builtin) {
+          messages.push_back("skipping " + path.string() + ": a built-in BRDF has that name");
+          return;
+        }
+        std::string text;
+        if (!readWholeFile(path, text)) {
+          // Gone between the listing and the read (another replica's delete) is not broken.
+          if (!std::filesystem::exists(path)) return;
+          messages.push_back("user BRDF " + path.string() + " cannot be read; listed as broken");
+          broken[name] = BrokenBrdf{name, "", makeError(ErrorCode::Internal, "cannot read " + path.string())};
+          return;
+        }
+        // Unchanged: keep the entry (and its definition) that scenes already resolved.
+        if (it != current.end() && it->second->source == text) {
+          loaded[name] = it->second;
+          return;
+        }
+        Result<BrdfDefinition> parsed = parseBrdf(text);
+        if (!parsed) {
+          messages.push_back("user BRDF " + path.string() + " does not parse; listed as broken: " +
+                             errorText(parsed.error()));
+          broken[name] = BrokenBrdf{name, std::move(text), parsed.takeError()};
+          return;
+        }
+        auto entry = std::make_shared<BrdfEntry>();
+        entry->name = name;
+        entry->source = std::move(text);
+        entry->definition = std::make_shared<const BrdfDefinition>(std::move(parsed.value()));
+        entry->builtin = false;
+        loaded[name] = std::move(entry);
+      })) {
+    if (log) log->insert(log->end(), messages.begin(), messages.end());
+    return;  // an unreadable folder changes nothing
+  }
   std::lock_guard lock(mutex_);
+  // The folder is the truth for user BRDFs: what it no longer holds is gone, what it holds now
+  // is what was last written there.
+  for (auto it = entries_.begin(); it != entries_.end();)
+    it = !it->second->builtin && !loaded.count(it->first) ? entries_.erase(it) : std::next(it);
   for (auto& [name, entry] : loaded) entries_[name] = entry;
-  for (auto& [name, b] : broken) broken_[name] = std::move(b);
-  return messages;
+  broken_ = std::move(broken);
+  if (log) log->insert(log->end(), messages.begin(), messages.end());
 }
 
 std::string BrdfLibrary::userFilePath(std::string_view name) const {
@@ -145,6 +196,7 @@ std::string BrdfLibrary::userFilePath(std::string_view name) const {
 }
 
 std::vector<BrokenBrdf> BrdfLibrary::listBroken() const {
+  refreshUserDir();
   std::lock_guard lock(mutex_);
   std::vector<BrokenBrdf> out;
   for (const auto& [name, b] : broken_) out.push_back(b);
@@ -152,6 +204,7 @@ std::vector<BrokenBrdf> BrdfLibrary::listBroken() const {
 }
 
 std::optional<BrokenBrdf> BrdfLibrary::findBroken(std::string_view name) const {
+  refreshUserDir();
   std::lock_guard lock(mutex_);
   auto it = broken_.find(name);
   if (it == broken_.end()) return std::nullopt;
@@ -159,12 +212,14 @@ std::optional<BrokenBrdf> BrdfLibrary::findBroken(std::string_view name) const {
 }
 
 std::shared_ptr<const BrdfEntry> BrdfLibrary::find(std::string_view name) const {
+  refreshUserDir();
   std::lock_guard lock(mutex_);
   auto it = entries_.find(name);
   return it == entries_.end() ? nullptr : it->second;
 }
 
 std::vector<std::shared_ptr<const BrdfEntry>> BrdfLibrary::list() const {
+  refreshUserDir();
   std::lock_guard lock(mutex_);
   std::vector<std::shared_ptr<const BrdfEntry>> out;
   out.reserve(entries_.size());

@@ -4,6 +4,7 @@
 // one keeps a valid definition. Thread-safe.
 #pragma once
 
+#include <cstdint>
 #include <map>
 #include <memory>
 #include <mutex>
@@ -88,7 +89,18 @@ class BrdfLibrary {
   // <store>/<name>.brdf; empty without a user store.
   std::string userFilePath(std::string_view name) const;
 
+  // Re-reads the user store when its folder changed since the last look (a save or delete by
+  // another replica sharing the folder, docs/deploy.md). Every lookup above calls it first, so
+  // a change on disk is seen by the next request; an unchanged folder costs one stat().
+  void refreshUserDir() const;
+
  private:
+  int64_t directoryStamp() const;  // the user store folder's mtime in ns; -1 when unreadable
+  // Makes the user entries and broken files what the folder holds now (refreshMutex_ held).
+  void rescanUserDirLocked(std::vector<std::string>* log);
+  mutable std::mutex refreshMutex_;  // order: refreshMutex_ before mutex_
+  mutable int64_t seenDirStamp_ = -2;
+
   mutable std::mutex mutex_;
   // Serializes file writes with the map update, so the file on disk and the entry agree.
   std::mutex storeMutex_;
