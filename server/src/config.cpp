@@ -32,6 +32,13 @@ ParseOutcome fail(std::string message) {
 
 }  // namespace
 
+bool isValidReplicaTag(std::string_view tag) {
+  if (tag.empty() || tag.size() > 63 || tag.front() == '-' || tag.back() == '-') return false;
+  for (char c : tag)
+    if (!((c >= 'a' && c <= 'z') || (c >= '0' && c <= '9') || c == '-')) return false;
+  return true;
+}
+
 std::string usageText(const char* program) {
   std::string p = program ? program : "brdfa-server";
   return "usage: " + p +
@@ -92,6 +99,12 @@ std::string usageText(const char* program) {
          "                    BRDF whose SPIR-V is cached (never compiling GLSL), so BRDFs used\n"
          "                    before are instant on first use; without it BRDFs compile on\n"
          "                    first use and start-up prepares nothing\n"
+         "  --replica NAME    this replica's tag behind a balancer (default $BRDFA_REPLICA, else\n"
+         "                    none): 1-63 of [a-z0-9-]; session and job ids become NAME.<id>\n"
+         "                    (docs/deploy.md)\n"
+         "  --drain-seconds S on SIGTERM, refuse new sessions and jobs (503 draining) and let open\n"
+         "                    streams and requests go on for up to S seconds, then stop (default\n"
+         "                    0: stop at once). A second SIGTERM, or SIGINT, stops at once\n"
          "  --help            show this text\n"
          "On start prints one line `listening on http://HOST:PORT` to stdout.\n";
 }
@@ -100,6 +113,8 @@ ParseOutcome parse_command_line(int argc, const char* const* argv) {
   ServerConfig config;
   const char* envRoot = std::getenv("BRDFA_ROOT");
   config.root = (envRoot && *envRoot) ? envRoot : BRDFA_DEFAULT_ROOT;
+  const char* envReplica = std::getenv("BRDFA_REPLICA");
+  if (envReplica) config.replica = envReplica;
 
   for (int i = 1; i < argc; ++i) {
     std::string_view arg = argv[i];
@@ -209,6 +224,10 @@ ParseOutcome parse_command_line(int argc, const char* const* argv) {
       err = takeInt(1, 1'000'000, config.maxConnectionsPerAddress);
     else if (name == "--request-read-timeout")
       err = takeInt(1, 3600, config.requestReadTimeoutSec);
+    else if (name == "--replica")
+      err = takeString(config.replica);
+    else if (name == "--drain-seconds")
+      err = takeSeconds(0, 3600, config.drainSeconds);
     else if (name == "--environment-dir") {
       std::string dir;
       err = takeString(dir);
@@ -221,6 +240,9 @@ ParseOutcome parse_command_line(int argc, const char* const* argv) {
       err = "unknown option '" + std::string(arg) + "'";
     if (err) return fail(*err + "\n" + usageText(argv[0]));
   }
+  if (!config.replica.empty() && !isValidReplicaTag(config.replica))
+    return fail("--replica (or $BRDFA_REPLICA) must be 1-63 of [a-z0-9-], starting and ending with a letter or "
+                "digit, got '" + config.replica + "'\n" + usageText(argv[0]));
   ParseOutcome out;
   out.config = config;
   return out;

@@ -361,6 +361,7 @@ void GuardedServer::refuse(socket_t sock, const std::string& address) {
                 " connections open (--max-connections-per-address); close some and retry");
   res.set_header("Connection", "close");
   res.set_header("Retry-After", "1");
+  if (limits_.onRefused) limits_.onRefused("too_many_connections");
   const std::string wire = serialize(res, "Service Unavailable");
   // A fresh socket's send buffer takes the small answer whole; a client that cannot take it
   // is not worth a wait.

@@ -98,12 +98,14 @@ void sendError(httplib::Response& res, int status, const std::string& code, cons
                const std::string& field) {
   nlohmann::json body{{"error", code}, {"message", message}};
   if (!field.empty()) body["field"] = field;
+  res.set_header(kErrorNameHeader, code);
   sendJson(res, body, status);
 }
 
 void sendError(httplib::Response& res, const Error& error) {
   nlohmann::json body{{"error", errorName(error.code)}, {"message", error.message}};
   if (!error.field.empty()) body["field"] = error.field;
+  res.set_header(kErrorNameHeader, errorName(error.code));
   if (error.code == ErrorCode::CompileError || !error.diagnostics.empty())
     body["diagnostics"] = diagnosticsToJson(error.diagnostics);
   sendJson(res, body, httpStatusFor(error.code));

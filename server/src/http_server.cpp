@@ -28,6 +28,8 @@ Result<std::unique_ptr<HttpServer>> HttpServer::create(const ServerConfig& confi
   limits.threads = static_cast<size_t>(config.threads);
   limits.maxPerAddress = config.maxConnectionsPerAddress;
   limits.requestReadTimeout = std::chrono::seconds(config.requestReadTimeoutSec);
+  ServiceMetrics* metrics = &out->service_->metrics;
+  limits.onRefused = [metrics](const char* reason) { metrics->countResponse(503, reason); };
   if (config.maxConnectionsPerAddress >= config.threads)
     log.push_back("warning: --max-connections-per-address " + std::to_string(config.maxConnectionsPerAddress) +
                   " is not below --threads " + std::to_string(config.threads) +
@@ -53,6 +55,13 @@ Result<std::unique_ptr<HttpServer>> HttpServer::create(const ServerConfig& confi
   registerAssetRoutes(http, s);
   registerStaticRoutes(http, s);
   return out;
+}
+
+void HttpServer::beginDrain() { service_->draining = true; }
+
+bool HttpServer::drained() const {
+  return service_->activeStreams.load() == 0 && service_->frameWaiters.load() == 0 &&
+         service_->renderSlots.taken() == 0;
 }
 
 Result<int> HttpServer::bind() {

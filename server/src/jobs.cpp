@@ -52,7 +52,8 @@ class JobManager::Context : public JobContext {
   Job& job_;
 };
 
-JobManager::JobManager(std::shared_ptr<Renderer> renderer, int workers) : renderer_(std::move(renderer)) {
+JobManager::JobManager(std::shared_ptr<Renderer> renderer, int workers, std::string idPrefix)
+    : renderer_(std::move(renderer)), idPrefix_(std::move(idPrefix)) {
   for (int i = 0; i < workers; ++i) workers_.emplace_back([this] { workerLoop(); });
   runnerWorker_ = std::thread([this] { runnerLoop(); });
 }
@@ -94,7 +95,7 @@ std::optional<std::string> JobManager::submitRunner(std::string kind, json reque
     size_t open = 0;
     for (const auto& j : jobs_) open += j->isRunner() && !j->over();
     if (open >= kMaxOpenRunnerJobs || !makeRoomLocked()) return std::nullopt;
-    job->id = "job-" + std::to_string(nextId_++);
+    job->id = idPrefix_ + "job-" + std::to_string(nextId_++);
     jobs_.push_back(job);
     if (stopping_) {
       job->cancelFlag = true;
@@ -167,7 +168,7 @@ std::optional<std::string> JobManager::submit(std::vector<JobItem> items) {
   {
     std::lock_guard lock(mutex_);
     if (!makeRoomLocked()) return std::nullopt;
-    job->id = "job-" + std::to_string(nextId_++);
+    job->id = idPrefix_ + "job-" + std::to_string(nextId_++);
     jobs_.push_back(job);
     if (!stopping_)
       for (size_t i = 0; i < job->items.size(); ++i) queue_.push_back(Task{job, i});

@@ -45,6 +45,20 @@ int main(int argc, char** argv) {
   std::thread signalThread([&] {
     int sig = 0;
     sigwait(&stopSignals, &sig);
+    if (serving && sig == SIGTERM && config.drainSeconds > 0) {
+      // Drain: no new sessions or jobs; open streams and requests go on until they end or the
+      // time is up. A second signal cuts it short.
+      std::fprintf(stderr, "brdfa-server: SIGTERM, draining for up to %g s\n", config.drainSeconds);
+      server.value()->beginDrain();
+      const auto deadline = std::chrono::steady_clock::now() + std::chrono::duration<double>(config.drainSeconds);
+      while (serving && !server.value()->drained() && std::chrono::steady_clock::now() < deadline) {
+        timespec slice{0, 100'000'000};
+        if (sigtimedwait(&stopSignals, nullptr, &slice) > 0) {
+          std::fprintf(stderr, "brdfa-server: second signal, not waiting for the drain\n");
+          break;
+        }
+      }
+    }
     if (serving) std::fprintf(stderr, "brdfa-server: signal %d, stopping\n", sig);
     // Repeated until run() returns: a signal that arrives before the listener has started
     // would otherwise be lost (httplib's stop() does nothing while it is not yet running).

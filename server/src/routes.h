@@ -24,6 +24,13 @@ void registerJobRoutes(httplib::Server& server, Service& service);  // batch tes
 void registerAssetRoutes(httplib::Server& server, Service& service);  // uploads, listing
 void registerStaticRoutes(httplib::Server& server, Service& service);  // last: catch-all GET
 
+// GET /metrics' body: the Prometheus text format (metrics_exposition.cpp).
+std::string metricsText(const Service& service);
+
+// True, having answered 503 `draining`, when the server drains (SIGTERM): it takes no new
+// sessions or jobs, and the balancer sends them to another replica.
+bool refuseWhileDraining(const Service& service, httplib::Response& res);
+
 // Parses the body as JSON; on failure answers 400 bad_json and returns nullopt.
 std::optional<nlohmann::json> readJsonBody(const httplib::Request& req, httplib::Response& res);
 

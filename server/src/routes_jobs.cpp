@@ -11,6 +11,7 @@ namespace brdfa::server {
 
 void registerJobRoutes(httplib::Server& server, Service& service) {
   server.Post("/api/jobs/validate", [&service](const httplib::Request& req, httplib::Response& res) {
+    if (refuseWhileDraining(service, res)) return;
     auto body = readJsonBody(req, res);
     if (!body) return;
     if (!body->is_object())
@@ -74,6 +75,7 @@ void registerJobRoutes(httplib::Server& server, Service& service) {
   });
 
   server.Post("/api/jobs/convergence", [&service](const httplib::Request& req, httplib::Response& res) {
+    if (refuseWhileDraining(service, res)) return;
     auto body = readJsonBody(req, res);
     if (!body) return;
     Result<ConvergenceJobSpec> spec = parseConvergenceJob(*body, service.resolver());

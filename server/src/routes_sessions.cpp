@@ -207,6 +207,7 @@ void registerSessionRoutes(httplib::Server& server, Service& service) {
   });
 
   server.Post("/api/sessions", [&service](const httplib::Request& req, httplib::Response& res) {
+    if (refuseWhileDraining(service, res)) return;
     nlohmann::json body = nlohmann::json::object();
     if (!req.body.empty()) {
       auto parsed = readJsonBody(req, res);

@@ -3,6 +3,7 @@
 #include <cstdio>
 
 #include "brdfa_server/http_errors.h"
+#include "brdfa_server/prometheus_text.h"
 #include "brdfa_server/request_body.h"
 #include "routes.h"
 
@@ -69,6 +70,13 @@ void setFrameHeaders(httplib::Response& res, const FrameStats& stats) {
   res.set_header("Cache-Control", "no-store");
 }
 
+bool refuseWhileDraining(const Service& service, httplib::Response& res) {
+  if (!service.draining) return false;
+  res.set_header("Retry-After", "1");
+  sendError(res, 503, "draining", "this replica is shutting down and takes no new sessions or jobs; retry");
+  return true;
+}
+
 namespace {
 // /api/health's `memory`: --max-memory and what holds it now, the renderer's uses and the
 // uploads in flight here (docs/api.md, Health).
@@ -127,8 +135,36 @@ void registerSystemRoutes(httplib::Server& server, Service& service) {
     sendError(res, 500, "internal", "internal error: " + what);
   });
 
-  server.set_logger([](const httplib::Request& req, const httplib::Response& res) {
-    std::fprintf(stderr, "%s %s -> %d\n", req.method.c_str(), req.path.c_str(), res.status);
+  // Runs on every response before it is written (the logger runs after): counted here, a
+  // response is in /metrics by the time its client reads it. Every response names the replica
+  // that made it (the balancer's routing is checked by it).
+  server.set_post_routing_handler([&service](const httplib::Request&, httplib::Response& res) {
+    // The error's name, from sendError; internal, so it is taken off before the response goes.
+    service.metrics.countResponse(res.status, res.get_header_value(kErrorNameHeader));
+    res.headers.erase(kErrorNameHeader);
+    if (!service.config.replica.empty()) res.set_header("X-Brdfa-Replica", service.config.replica);
+  });
+
+  server.set_logger([&service](const httplib::Request& req, const httplib::Response& res) {
+    // A balancer probes every replica each second: its successful probes would drown the log.
+    if (res.status < 300 && (req.path == "/api/health" || req.path == "/api/ready")) return;
+    if (service.config.replica.empty())
+      std::fprintf(stderr, "%s %s -> %d\n", req.method.c_str(), req.path.c_str(), res.status);
+    else
+      std::fprintf(stderr, "[%s] %s %s -> %d\n", service.config.replica.c_str(), req.method.c_str(), req.path.c_str(),
+                   res.status);
+  });
+
+  // Readiness for a balancer: 503 while draining, so new work goes elsewhere (liveness is
+  // /api/health, which answers to the end).
+  server.Get("/api/ready", [&service](const httplib::Request&, httplib::Response& res) {
+    if (refuseWhileDraining(service, res)) return;
+    sendJson(res, {{"status", "ready"}, {"replica", service.config.replica}});
+  });
+
+  server.Get("/metrics", [&service](const httplib::Request&, httplib::Response& res) {
+    res.set_header("Cache-Control", "no-store");
+    res.set_content(metricsText(service), PrometheusText::kContentType);
   });
 
   server.Get("/api/health", [&service](const httplib::Request&, httplib::Response& res) {

@@ -14,8 +14,10 @@ bool RenderSlots::acquire(std::chrono::milliseconds timeout, uint64_t units) {
   std::unique_lock lock(mutex_);
   if (units > capacity_ || (free_ < units && waiting_ >= maxWaiting_)) return false;
   ++waiting_;
+  const auto start = std::chrono::steady_clock::now();
   bool got = cv_.wait_for(lock, timeout, [&] { return shutdown_ || free_ >= units; });
   --waiting_;
+  if (waits_) waits_->add(std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
   if (!got || shutdown_) return false;
   free_ -= units;
   return true;
@@ -68,6 +70,8 @@ Result<std::unique_ptr<Service>> Service::create(const ServerConfig& config, std
   service->config = config;
   service->maxStreams = std::max(1, std::min(kMaxStreams, config.threads * 3 / 4));
   service->maxFrameWaiters = std::max(1, config.threads / 4);
+  service->renderSlots.recordWaitsIn(&service->metrics.renderQueueWait);
+  service->uploadSlots.recordWaitsIn(&service->metrics.uploadQueueWait);
 
   std::error_code ec;
   std::filesystem::create_directories(config.dataDir, ec);
@@ -119,12 +123,13 @@ Result<std::unique_ptr<Service>> Service::create(const ServerConfig& config, std
     log.push_back("warning: " + msg);
   for (std::string& msg : service->library.loadUserDir(service->userBrdfDir())) log.push_back("warning: " + msg);
   service->library.setPresetRoot((std::filesystem::path(config.dataDir) / "presets").string());
-  service->jobs = std::make_unique<JobManager>(service->renderer);
+  service->jobs = std::make_unique<JobManager>(service->renderer, kJobWorkers, service->idPrefix());
   if (config.hotLoad) service->hotLoader.start(service->renderer, service->library.list());
 
   service->sessions = std::make_unique<SessionManager>(
       service->renderer, std::chrono::milliseconds(std::chrono::seconds(config.idleTimeoutSec)), kMaxSessions,
-      std::chrono::milliseconds(std::chrono::seconds(config.sessionReclaimSec)));
+      std::chrono::milliseconds(std::chrono::seconds(config.sessionReclaimSec)), service->idPrefix(),
+      &service->metrics);
   SessionManager::Created created = service->sessions->create(kDefaultSessionId);
   if (!created.session) {
     return makeError(created.error ? created.error->code : ErrorCode::Internal,

@@ -1,5 +1,6 @@
 #include "brdfa_server/session.h"
 
+#include <algorithm>
 #include <cstdio>
 
 #include "brdfa/image_codec.h"
@@ -7,8 +8,9 @@
 
 namespace brdfa::server {
 
-Session::Session(std::string id, std::unique_ptr<RenderView> view, std::chrono::milliseconds idleTimeout)
-    : id_(std::move(id)), view_(std::move(view)), idleTimeout_(idleTimeout) {
+Session::Session(std::string id, std::unique_ptr<RenderView> view, std::chrono::milliseconds idleTimeout,
+                 ServiceMetrics* metrics)
+    : id_(std::move(id)), view_(std::move(view)), idleTimeout_(idleTimeout), metrics_(metrics) {
   thread_ = std::thread([this] { guarded(&Session::renderLoop); });
   encoder_ = std::thread([this] { guarded(&Session::encodeLoop); });
 }
@@ -333,6 +335,8 @@ void Session::renderLoop() {
     }
     if (wantPass) {
       uint64_t versionBefore = stats_.sceneVersion;
+      const uint64_t sppBefore = stats_.spp;
+      const uint64_t pixels = uint64_t(std::max(render_.width, 0)) * uint64_t(std::max(render_.height, 0));
       lock.unlock();
       Result<FrameStats> pass = view_->renderPass();
       lock.lock();
@@ -345,6 +349,13 @@ void Session::renderLoop() {
         progress_.notify_all();
         frames_.notify_all();
         continue;
+      }
+      if (metrics_) {
+        metrics_->passTime.add(pass->lastPassMs / 1000.0);
+        // The pass's own samples; a scene applied meanwhile restarted the count from 0.
+        const uint64_t spp = pass->sceneVersion == versionBefore && pass->spp >= sppBefore ? pass->spp - sppBefore
+                                                                                          : pass->spp;
+        metrics_->samplesRendered += spp * pixels;
       }
       noteStatsLocked(pass.value(), true);
       progress_.notify_all();

@@ -5,8 +5,14 @@
 namespace brdfa::server {
 
 SessionManager::SessionManager(std::shared_ptr<Renderer> renderer, std::chrono::milliseconds idleTimeout,
-                               size_t maxSessions, std::chrono::milliseconds reclaimAfter)
-    : renderer_(std::move(renderer)), idleTimeout_(idleTimeout), maxSessions_(maxSessions), reclaimAfter_(reclaimAfter) {}
+                               size_t maxSessions, std::chrono::milliseconds reclaimAfter, std::string idPrefix,
+                               ServiceMetrics* metrics)
+    : renderer_(std::move(renderer)),
+      idleTimeout_(idleTimeout),
+      maxSessions_(maxSessions),
+      reclaimAfter_(reclaimAfter),
+      idPrefix_(std::move(idPrefix)),
+      metrics_(metrics) {}
 
 std::shared_ptr<Session> SessionManager::takeAbandonedLocked() {
   const auto now = Session::Clock::now();
@@ -73,8 +79,8 @@ SessionManager::Created SessionManager::create(const std::string& requestedId) {
     refusedNow = refused();
     if (!refusedNow) {
       std::string id = requestedId;
-      while (id.empty() || sessions_.count(id)) id = randomId();
-      auto session = std::make_shared<Session>(id, std::move(view.value()), idleTimeout_);
+      while (id.empty() || sessions_.count(id)) id = idPrefix_ + randomId();
+      auto session = std::make_shared<Session>(id, std::move(view.value()), idleTimeout_, metrics_);
       sessions_[id] = session;
       out.session = std::move(session);
     }

@@ -5,6 +5,7 @@
 #include <cstdint>
 #include <optional>
 #include <string>
+#include <string_view>
 #include <vector>
 
 namespace brdfa::server {
@@ -40,7 +41,17 @@ struct ServerConfig {
   // --environment-dir (repeatable): folders whose *.exr become read-only environments
   // `blender_<stem>`. Unset: Debian blender-data's studio-light worlds, when installed.
   std::optional<std::vector<std::string>> environmentDirs;
+  // Several replicas behind one balancer (issue 14, docs/deploy.md). --replica (else
+  // $BRDFA_REPLICA): this server's tag, [a-z0-9-] as a Kubernetes pod name; session and job ids
+  // become <tag>.<id> so the balancer can route by path, and every response says X-Brdfa-Replica.
+  std::string replica;
+  // --drain-seconds: on SIGTERM, how long open streams and requests may go on (new sessions and
+  // jobs are refused with 503 `draining`, /api/ready answers 503) before the server stops.
+  double drainSeconds = 0;
 };
+
+// Whether `tag` may be a replica tag: 1-63 of [a-z0-9-], starting and ending alphanumeric.
+bool isValidReplicaTag(std::string_view tag);
 
 // What parse_command_line decided: run with `config`, or exit with `exitCode` after printing
 // `message` (usage on --help goes to stdout with code 0; errors to stderr with code 2).

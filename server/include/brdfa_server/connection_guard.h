@@ -8,6 +8,7 @@
 
 #include <chrono>
 #include <condition_variable>
+#include <functional>
 #include <cstddef>
 #include <map>
 #include <mutex>
@@ -25,6 +26,8 @@ struct ConnectionLimits {
   // connection's accept (or of the previous response, on a kept-alive connection); the body
   // within this of the headers, plus one second per kBodyMinBytesPerSecond received.
   std::chrono::milliseconds requestReadTimeout{10'000};
+  // Told of each connection refused before its request was read (for /metrics' rejections).
+  std::function<void(const char* reason)> onRefused;
 };
 
 // A body slower than this on average is cut (a 64 MiB upload gets 64 minutes).

@@ -21,6 +21,10 @@ const char* errorName(ErrorCode code);
 nlohmann::json diagnosticToJson(const Diagnostic& d);
 nlohmann::json diagnosticsToJson(const std::vector<Diagnostic>& ds);
 
+// Both sendError overloads also put the error's name in this header, for /metrics' rejections
+// by reason; the post-routing handler (routes_system.cpp) takes it off before the response goes.
+inline constexpr const char* kErrorNameHeader = "X-Brdfa-Error-Name";
+
 // Writes `error` as the JSON body with its mapped status.
 void sendError(httplib::Response& res, const Error& error);
 

@@ -33,6 +33,12 @@ class HttpServer {
   // listener. run() returns once the worker threads have finished.
   void stop();
 
+  // Draining (SIGTERM with --drain-seconds): from beginDrain() on, new sessions and jobs get
+  // 503 `draining` and /api/ready 503; everything else is still served. drained() is true once
+  // no stream, frame wait or one-shot render is open, when stop() loses nobody's answer.
+  void beginDrain();
+  bool drained() const;
+
  private:
   HttpServer() = default;
   std::unique_ptr<Service> service_;

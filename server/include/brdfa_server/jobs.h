@@ -49,7 +49,8 @@ using JobRunner = std::function<Result<nlohmann::json>(JobContext&)>;
 
 class JobManager {
  public:
-  explicit JobManager(std::shared_ptr<Renderer> renderer, int workers = kJobWorkers);
+  // Job ids are idPrefix + "job-<n>" (a replica's "<tag>.", config.h).
+  explicit JobManager(std::shared_ptr<Renderer> renderer, int workers = kJobWorkers, std::string idPrefix = {});
   ~JobManager();  // stop() and join the workers
 
   // Queues a batch test; returns its id, or nullopt when kMaxJobs jobs are all unfinished.
@@ -116,6 +117,7 @@ class JobManager {
   std::condition_variable runnerCv_;
   std::deque<std::shared_ptr<Job>> jobs_;  // oldest first
   uint64_t nextId_ = 1;
+  const std::string idPrefix_;
   bool stopping_ = false;
   std::vector<std::thread> workers_;
   std::thread runnerWorker_;

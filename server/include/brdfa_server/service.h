@@ -16,6 +16,7 @@
 #include "brdfa_server/config.h"
 #include "brdfa_server/hot_load.h"
 #include "brdfa_server/jobs.h"
+#include "brdfa_server/metrics.h"
 #include "brdfa_server/scene_json.h"
 #include "brdfa_server/session_manager.h"
 #include "brdfa_server/static_files.h"
@@ -51,6 +52,8 @@ class RenderSlots {
   void shutdown();
   uint64_t capacity() const { return capacity_; }
   uint64_t taken() const;
+  // Every acquire()'s wait, taken or not, is added to `waits` (set once, before use).
+  void recordWaitsIn(DurationRecorder* waits) { waits_ = waits; }
 
  private:
   mutable std::mutex mutex_;
@@ -60,6 +63,7 @@ class RenderSlots {
   const int maxWaiting_;
   int waiting_ = 0;
   bool shutdown_ = false;
+  DurationRecorder* waits_ = nullptr;
 };
 
 struct Service {
@@ -82,6 +86,10 @@ struct Service {
   void beginShutdown();
 
   ServerConfig config;
+  // Before everything that counts into it (sessions, slots).
+  ServiceMetrics metrics;
+  // "<replica>." with --replica, else empty: the start of session and job ids.
+  std::string idPrefix() const { return config.replica.empty() ? std::string() : config.replica + "."; }
   std::shared_ptr<Renderer> renderer;  // declared before sessions: views die before the device
   BrdfLibrary library;
   RenderSlots uploadSlots{kMaxConcurrentUploadChecks, kMaxQueuedUploadChecks};
@@ -102,6 +110,9 @@ struct Service {
   std::atomic<int> activeStreams{0};
   std::atomic<int> frameWaiters{0};
   std::atomic<bool> stopping{false};
+  // SIGTERM with --drain-seconds: new sessions and jobs get 503 `draining`, /api/ready 503; the
+  // rest is served until the drain ends (HttpServer::drain).
+  std::atomic<bool> draining{false};
   // The HTTP front's open connections (set by HttpServer; null without one): a long handler
   // asks it whether its client went away.
   const ConnectionRegistry* connections = nullptr;

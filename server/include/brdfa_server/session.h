@@ -22,6 +22,7 @@
 
 #include "brdfa/renderer.h"
 #include "brdfa_server/convergence.h"
+#include "brdfa_server/metrics.h"
 
 namespace brdfa::server {
 
@@ -36,7 +37,9 @@ class Session {
  public:
   using Clock = std::chrono::steady_clock;
 
-  Session(std::string id, std::unique_ptr<RenderView> view, std::chrono::milliseconds idleTimeout);
+  // `metrics`, when given, counts each pass's time and pixel samples; it must outlive the session.
+  Session(std::string id, std::unique_ptr<RenderView> view, std::chrono::milliseconds idleTimeout,
+          ServiceMetrics* metrics = nullptr);
   ~Session();  // stop()
   Session(const Session&) = delete;
   Session& operator=(const Session&) = delete;
@@ -145,6 +148,7 @@ class Session {
   const std::string id_;
   const std::unique_ptr<RenderView> view_;
   const std::chrono::milliseconds idleTimeout_;
+  ServiceMetrics* const metrics_;
 
   std::mutex sceneUpdateMutex_;  // order: sceneUpdateMutex_ before mutex_
   std::function<void(Session&, std::unique_lock<std::mutex>&)> initializer_;

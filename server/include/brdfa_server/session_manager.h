@@ -21,8 +21,11 @@ class SessionManager {
   // unused for at least `reclaimAfter` (browser tabs make sessions and cannot reliably delete
   // them: a class would otherwise fill the server with abandoned ones). `default` is never
   // reclaimed.
+  // `idPrefix` starts every random id (a replica's "<tag>.", config.h), so a balancer can tell
+  // from an id which replica holds the session.
   SessionManager(std::shared_ptr<Renderer> renderer, std::chrono::milliseconds idleTimeout, size_t maxSessions,
-                 std::chrono::milliseconds reclaimAfter = std::chrono::minutes(10));
+                 std::chrono::milliseconds reclaimAfter = std::chrono::minutes(10), std::string idPrefix = {},
+                 ServiceMetrics* metrics = nullptr);
   ~SessionManager();  // stopAll()
 
   struct Created {
@@ -30,7 +33,7 @@ class SessionManager {
     bool full = false;                 // the session cap was reached
     std::optional<Error> error;        // createView failed
   };
-  // A new session with the given id, or a random 16-hex-digit one when `id` is empty.
+  // A new session with the given id, or idPrefix + a random 16-hex-digit one when `id` is empty.
   Created create(const std::string& id = {});
 
   std::shared_ptr<Session> find(const std::string& id) const;
@@ -52,6 +55,8 @@ class SessionManager {
   const std::chrono::milliseconds idleTimeout_;
   const size_t maxSessions_;
   const std::chrono::milliseconds reclaimAfter_;
+  const std::string idPrefix_;
+  ServiceMetrics* const metrics_;
   // The non-default session unused for longest, if unused for at least reclaimAfter_; removed
   // from the map (the caller stops it outside the lock). Holds mutex_.
   std::shared_ptr<Session> takeAbandonedLocked();
