@@ -1,14 +1,15 @@
 #!/bin/sh
 # Writes an HAProxy (Debian 12: 2.6) configuration for N brdfa-server replicas on stdout.
 #
-#   deploy/haproxy/make-haproxy-cfg.sh [--bind ADDR:PORT] [--dns] NAME=HOST:PORT ...
+#   deploy/haproxy/make-haproxy-cfg.sh [--bind ADDR:PORT] [--dns] [--gone-file PATH] NAME=HOST:PORT ...
 #
 # NAME is each replica's --replica tag. The routing rule (docs/deploy.md):
 #   - A path that names a session or a job, /api/sessions/<NAME>.<id>... or /api/jobs/<NAME>.<id>...,
 #     and POST /api/sessions?colocate=<NAME>.<id>, go to replica NAME: sessions and jobs live in
 #     the memory of the replica that made them, and their ids carry its tag.
-#   - If that replica is down, the balancer answers 404 itself: its sessions are gone, and no
-#     other replica may answer for them.
+#   - If that replica is down, the balancer answers 404 itself (--gone-file, by default
+#     replica-gone.http beside this script): its sessions are gone, and no other replica may
+#     answer for them.
 #   - /api/sessions/default... goes to the first replica, or the next one up.
 #   - Everything else (new sessions, one-shot renders, analysis, batch jobs, the library, the UI)
 #     goes to the ready replica with the fewest open requests.
@@ -17,16 +18,18 @@ set -eu
 
 bind="127.0.0.1:8080"
 dns=""
+gone="$(cd "$(dirname "$0")" && pwd)/replica-gone.http"
 while [ $# -gt 0 ]; do
   case "$1" in
     --bind) bind="$2"; shift 2 ;;
     --dns) dns=1; shift ;;
-    -h|--help) sed -n '2,18p' "$0" | sed 's/^# \{0,1\}//'; exit 0 ;;
+    --gone-file) gone="$2"; shift 2 ;;
+    -h|--help) sed -n '2,19p' "$0" | sed 's/^# \{0,1\}//'; exit 0 ;;
     --*) echo "unknown option $1" >&2; exit 2 ;;
     *) break ;;
   esac
 done
-[ $# -gt 0 ] || { echo "usage: $0 [--bind ADDR:PORT] [--dns] NAME=HOST:PORT ..." >&2; exit 2; }
+[ $# -gt 0 ] || { echo "usage: $0 [--bind ADDR:PORT] [--dns] [--gone-file PATH] NAME=HOST:PORT ..." >&2; exit 2; }
 for r in "$@"; do
   name="${r%%=*}"
   addr="${r#*=}"
@@ -58,6 +61,8 @@ defaults
     timeout server 10m
     timeout tunnel 10m
     option http-server-close
+    # A refused connection is retried once; in the pool on another replica (redispatch).
+    retries 1
 CFG
 if [ -n "$dns" ]; then
   cat <<CFG
@@ -88,6 +93,7 @@ cat <<CFG
 # drains (SIGTERM), so it gets no new sessions but keeps answering its own below.
 backend pool
     balance leastconn
+    option redispatch 1
     option httpchk GET /api/ready
     http-check expect status 200
 CFG
@@ -117,8 +123,10 @@ for r in "$@"; do
 backend replica_$name
     option httpchk GET /api/health
     http-check expect status 200
-    # The replica is gone, and its sessions and jobs with it: a clear 404, never another's.
+    # The replica is gone, and its sessions and jobs with it: a clear 404, never another's. Marked
+    # down, it is never tried; refused before the check noticed, the 503 becomes the same 404.
     http-request return status 404 content-type application/json string "{\"error\":\"not_found\",\"message\":\"replica $name is not running: its sessions and jobs are gone\"}" if { nbsrv lt 1 }
+    errorfile 503 $gone
     server $name ${r#*=} $server_opts
 CFG
 done

@@ -1,0 +1,326 @@
+// The deployed topology, for real (issue 14): three brdfa-server replicas on loopback ports with
+// one shared data folder, Debian's HAProxy in front, configured by
+// deploy/haproxy/make-haproxy-cfg.sh. Through the balancer's port it creates six sessions,
+// streams from each and patches each; checks that every request reached the replica whose tag
+// the session id carries (X-Brdfa-Replica), that a BRDF saved through one replica is listed by
+// all and a delete seen by all, that /metrics parses with a Prometheus text-format parser and its
+// counters move, and that stopping one replica (SIGTERM: it drains) leaves the others streaming
+// while its own sessions answer 404. Every request is logged with the replica that served it.
+//
+//   node tests/deploy/topology.mjs --server build/server/brdfa-server --root .
+// Exit 77 (skipped) when haproxy is not installed.
+import { spawn, execFileSync } from 'node:child_process';
+import { mkdtempSync, rmSync, writeFileSync, existsSync } from 'node:fs';
+import { createServer } from 'node:net';
+import { tmpdir } from 'node:os';
+import { join, resolve } from 'node:path';
+import { createRequire } from 'node:module';
+
+const args = Object.fromEntries(
+  process.argv.slice(2).reduce((acc, a, i, all) => (a.startsWith('--') ? [...acc, [a.slice(2), all[i + 1]]] : acc), []),
+);
+const root = resolve(args.root ?? '.');
+const serverBinary = resolve(args.server ?? join(root, 'build/server/brdfa-server'));
+const require = createRequire(join(root, 'web/package.json'));
+const parsePrometheus = require('parse-prometheus-text-format');
+
+const haproxy = ['/usr/sbin/haproxy', '/usr/bin/haproxy'].find((p) => existsSync(p));
+if (!haproxy) {
+  console.log('haproxy is not installed (docker/install-deps.sh installs it): skipped');
+  process.exit(77);
+}
+
+const sleep = (ms) => new Promise((r) => setTimeout(r, ms));
+let failures = 0;
+function check(ok, what) {
+  console.log(`${ok ? 'ok  ' : 'FAIL'} ${what}`);
+  if (!ok) failures += 1;
+  return ok;
+}
+
+const dataDir = mkdtempSync(join(tmpdir(), 'brdfa-topology-'));
+const children = [];
+function startProcess(name, cmd, argv) {
+  const proc = spawn(cmd, argv, { stdio: ['ignore', 'pipe', 'pipe'] });
+  const entry = { name, proc, log: '', exited: null };
+  const keep = (d) => { entry.log = (entry.log + d).slice(-200000); };
+  proc.stdout.on('data', keep);
+  proc.stderr.on('data', keep);
+  proc.on('exit', (code, signal) => { entry.exited = { code, signal }; });
+  children.push(entry);
+  return entry;
+}
+
+async function startReplica(tag) {
+  const r = startProcess(tag, serverBinary, [
+    '--port', '0', '--root', root, '--data-dir', dataDir, '--replica', tag, '--drain-seconds', '4',
+    '--idle-timeout', '60', '--max-memory', '2048',
+  ]);
+  for (let i = 0; i < 600; i++) {
+    const m = r.log.match(/listening on (http:\/\/\S+)/);
+    if (m) { r.url = m[1]; return r; }
+    if (r.exited) break;
+    await sleep(50);
+  }
+  throw new Error(`replica ${tag} did not start:\n${r.log}`);
+}
+
+function freePort() {
+  return new Promise((res, rej) => {
+    const s = createServer();
+    s.once('error', rej);
+    s.listen(0, '127.0.0.1', () => { const { port } = s.address(); s.close(() => res(port)); });
+  });
+}
+
+// One request, logged with the replica that answered. `expect`: the replica it must reach.
+const requestLog = [];
+async function call(base, method, path, { json, text, expect, label } = {}) {
+  const init = { method, headers: {} };
+  if (json !== undefined) { init.body = JSON.stringify(json); init.headers['content-type'] = 'application/json'; }
+  if (text !== undefined) { init.body = text; init.headers['content-type'] = 'text/plain'; }
+  const res = await fetch(base + path, init);
+  const body = await res.text();
+  const replica = res.headers.get('x-brdfa-replica') ?? '(balancer)';
+  const line = `${method.padEnd(6)} ${path.padEnd(58)} -> ${res.status} served by ${replica}` +
+    (expect ? ` (expected ${expect})` : '');
+  console.log(`  ${line}`);
+  requestLog.push(line);
+  if (expect) check(replica === expect, `${label ?? `${method} ${path}`} reached its session's replica ${expect}`);
+  let parsed = null;
+  try { parsed = JSON.parse(body); } catch { /* not JSON */ }
+  return { status: res.status, replica, body, json: parsed };
+}
+
+// Reads a multipart PNG stream until `frames` parts arrived or `ms` passed; resolves with the
+// count and the replica that served it. The stream stays open until stop() is called.
+function openStream(base, id) {
+  const controller = new AbortController();
+  const state = { frames: 0, replica: null, status: 0, ended: false };
+  const marker = Buffer.from('Content-Type: image/png');
+  state.done = (async () => {
+    try {
+      const res = await fetch(`${base}/api/sessions/${id}/stream`, { signal: controller.signal });
+      state.status = res.status;
+      state.replica = res.headers.get('x-brdfa-replica');
+      const reader = res.body.getReader();
+      let tail = Buffer.alloc(0);
+      for (;;) {
+        const { value, done } = await reader.read();
+        if (done) break;
+        const chunk = Buffer.concat([tail, Buffer.from(value)]);
+        let at = 0;
+        for (;;) {
+          const i = chunk.indexOf(marker, at);
+          if (i < 0) break;
+          state.frames += 1;
+          at = i + marker.length;
+        }
+        tail = chunk.subarray(Math.max(at, chunk.length - marker.length));
+      }
+    } catch { /* aborted or cut */ }
+    state.ended = true;
+  })();
+  state.stop = () => controller.abort();
+  return state;
+}
+
+async function waitFor(pred, ms, step = 100) {
+  const end = Date.now() + ms;
+  while (Date.now() < end) { if (await pred()) return true; await sleep(step); }
+  return false;
+}
+
+const metricsOf = async (url) => {
+  const res = await fetch(`${url}/metrics`);
+  const text = await res.text();
+  return { families: parsePrometheus(text), text, type: res.headers.get('content-type') };
+};
+const value = (families, name, labels = {}) => {
+  const f = families.find((x) => x.name === name);
+  if (!f) return undefined;
+  const m = f.metrics.find((x) => Object.entries(labels).every(([k, v]) => (x.labels ?? {})[k] === v));
+  if (!m) return undefined;
+  return Number(m.value ?? m.count);
+};
+
+const scene = (i) => ({
+  environment: { name: 'furnace' },
+  objects: [{ mesh: 'sphere', brdf: 'lambert', params: { Kd: [0.5, 0.5, 0.5] } }],
+  render: { width: 48, height: 48, samples_per_frame: 1, max_samples: 1048576, seed: i },
+});
+
+let exitCode = 1;
+try {
+  const tags = ['r1', 'r2', 'r3'];
+  const replicas = {};
+  for (const t of tags) replicas[t] = await startReplica(t);
+  const lbPort = await freePort();
+  const cfgArgs = ['--bind', `127.0.0.1:${lbPort}`, ...tags.map((t) => `${t}=${new URL(replicas[t].url).host}`)];
+  const cfg = execFileSync(join(root, 'deploy/haproxy/make-haproxy-cfg.sh'), cfgArgs, { encoding: 'utf8' });
+  const cfgPath = join(dataDir, 'haproxy.cfg');
+  writeFileSync(cfgPath, cfg);
+  console.log(`haproxy on 127.0.0.1:${lbPort}; replicas ${tags.map((t) => `${t}=${replicas[t].url}`).join(' ')}`);
+  const lb = startProcess('haproxy', haproxy, ['-db', '-f', cfgPath]);
+  const base = `http://127.0.0.1:${lbPort}`;
+  check(await waitFor(async () => {
+    try { return (await fetch(`${base}/api/ready`)).status === 200; } catch { return false; }
+  }, 15000), 'the balancer answers /api/ready');
+  // Every replica up in the pool before sessions are spread.
+  await sleep(1500);
+
+  // The committed example config is the script's output, so it cannot drift from the rule.
+  const example = execFileSync(join(root, 'deploy/haproxy/make-haproxy-cfg.sh'),
+    ['--bind', '127.0.0.1:8080', '--gone-file', 'deploy/haproxy/replica-gone.http', 'r1=127.0.0.1:8081',
+      'r2=127.0.0.1:8082', 'r3=127.0.0.1:8083'], { encoding: 'utf8' });
+  const { readFileSync } = await import('node:fs');
+  check(readFileSync(join(root, 'deploy/haproxy/haproxy.cfg'), 'utf8') === example,
+    'deploy/haproxy/haproxy.cfg is what make-haproxy-cfg.sh writes');
+
+  console.log('\n-- six sessions through the balancer');
+  const sessions = [];
+  for (let i = 0; i < 6; i++) {
+    const r = await call(base, 'POST', '/api/sessions', { json: scene(i) });
+    check(r.status === 201, `session ${i} created (${r.status} ${r.status === 201 ? '' : r.body})`);
+    const id = r.json?.id ?? '';
+    const tag = id.split('.')[0];
+    check(tag === r.replica && tags.includes(tag), `session id ${id} carries the tag of the replica that made it (${r.replica})`);
+    sessions.push({ id, tag });
+  }
+  const used = new Set(sessions.map((s) => s.tag));
+  check(used.size === 3, `new sessions spread over the replicas by load: ${[...used].join(', ')}`);
+
+  const before = {};
+  for (const t of tags) before[t] = await metricsOf(replicas[t].url);
+
+  console.log('\n-- a stream from each, a patch to each');
+  const streams = sessions.map((s) => openStream(base, s.id));
+  check(await waitFor(() => streams.every((st) => st.frames >= 2), 60000), 'every stream delivers frames');
+  sessions.forEach((s, i) => {
+    check(streams[i].status === 200 && streams[i].replica === s.tag,
+      `stream of ${s.id} served by ${streams[i].replica} (expected ${s.tag})`);
+  });
+  for (const s of sessions) {
+    const r = await call(base, 'PATCH', `/api/sessions/${s.id}/scene`,
+      { json: { objects: [{ mesh: 'sphere', brdf: 'lambert', params: { Kd: [0.25, 0.5, 0.75] } }] }, expect: s.tag });
+    check(r.status === 200, `patch of ${s.id} -> ${r.status}`);
+    const st = await call(base, 'GET', `/api/sessions/${s.id}/stats`, { expect: s.tag });
+    check(st.status === 200, `stats of ${s.id}`);
+  }
+  const other = sessions.find((s) => s.tag !== sessions[0].tag);
+  const colocated = await call(base, 'POST', `/api/sessions?colocate=${other.id}`, { json: scene(9) });
+  check(colocated.status === 201 && colocated.replica === other.tag && colocated.json.id.startsWith(`${other.tag}.`),
+    `POST /api/sessions?colocate=${other.id} makes the new session on ${other.tag}`);
+  await call(base, 'DELETE', `/api/sessions/${colocated.json.id}`, { expect: other.tag });
+  const unknown = await call(base, 'GET', `/api/sessions/${sessions[0].tag}.0000000000000000/stats`, { expect: sessions[0].tag });
+  check(unknown.status === 404, 'an id the replica does not hold is 404 from that replica');
+
+  console.log('\n-- the shared data folder');
+  const brdf = 'analytic\n::begin parameters\ncolor Kd .5 .5 .5\n::end parameters\n::begin shader\n' +
+    'vec3 BRDF(vec3 L, vec3 V, vec3 N, vec3 X, vec3 Y) { return Kd / 3.14159265; }\n::end shader\n';
+  const saved = await call(base, 'PUT', '/api/brdfs/topology_shared', { text: brdf });
+  check(saved.status === 201 || saved.status === 200, `BRDF saved through the balancer (${saved.status}: ${saved.body.slice(0, 200)})`);
+  for (const t of tags) {
+    const list = await call(replicas[t].url, 'GET', '/api/brdfs');
+    check(JSON.stringify(list.json).includes('"topology_shared"'), `replica ${t} lists the BRDF saved via ${saved.replica}`);
+  }
+  const preset = await call(base, 'PUT', '/api/brdfs/topology_shared/presets/grey', { json: { Kd: [0.3, 0.3, 0.3] } });
+  check(preset.status === 201 || preset.status === 200, `preset saved via ${preset.replica} (${preset.status})`);
+  for (const t of tags) {
+    const p = await call(replicas[t].url, 'GET', '/api/brdfs/topology_shared/presets/grey');
+    check(p.status === 200, `replica ${t} reads the preset saved via ${preset.replica}`);
+  }
+  const deleter = tags.find((t) => t !== saved.replica);
+  const del = await call(replicas[deleter].url, 'DELETE', '/api/brdfs/topology_shared');
+  check(del.status === 204, `deleted through replica ${deleter}`);
+  for (const t of tags) {
+    const got = await call(replicas[t].url, 'GET', '/api/brdfs/topology_shared');
+    check(got.status === 404, `replica ${t} no longer has it (${got.status})`);
+  }
+
+  console.log('\n-- /metrics');
+  for (const t of tags) {
+    const after = await metricsOf(replicas[t].url);
+    check(after.type?.startsWith('text/plain; version=0.0.4'), `${t}: /metrics is the Prometheus text format (${after.type})`);
+    const names = after.families.map((f) => f.name);
+    for (const want of ['brdfa_sessions', 'brdfa_streams', 'brdfa_samples_rendered_total', 'brdfa_pass_duration_seconds',
+      'brdfa_queue_wait_seconds', 'brdfa_compiles_total', 'brdfa_compile_duration_seconds', 'brdfa_rejections_total',
+      'brdfa_memory_used_bytes', 'brdfa_memory_budget_bytes', 'brdfa_replica_info'])
+      if (!names.includes(want)) check(false, `${t}: /metrics has ${want}`);
+    for (const f of after.families) if (!f.help) check(false, `${t}: ${f.name} has help text`);
+    const mine = sessions.filter((s) => s.tag === t).length;
+    check(value(after.families, 'brdfa_sessions') === mine + 1, `${t}: brdfa_sessions = ${value(after.families, 'brdfa_sessions')} (its ${mine} + default)`);
+    check(value(after.families, 'brdfa_streams') === mine, `${t}: brdfa_streams = ${value(after.families, 'brdfa_streams')}`);
+    const s0 = value(before[t].families, 'brdfa_samples_rendered_total');
+    const s1 = value(after.families, 'brdfa_samples_rendered_total');
+    check(s1 > s0, `${t}: samples rendered moved ${s0} -> ${s1}`);
+    const p0 = value(before[t].families, 'brdfa_pass_duration_seconds');
+    const p1 = value(after.families, 'brdfa_pass_duration_seconds');
+    check(p1 > p0, `${t}: pass-time histogram count moved ${p0} -> ${p1}`);
+    const c1 = value(after.families, 'brdfa_compiles_total', { result: 'ok' }) +
+      value(after.families, 'brdfa_spirv_cache_hits_total', { cache: 'disk' }) +
+      value(after.families, 'brdfa_spirv_cache_hits_total', { cache: 'memory' });
+    check(c1 > 0, `${t}: programs compiled or read from the shared cache: ${c1}`);
+    check(value(after.families, 'brdfa_memory_used_bytes') <= value(after.families, 'brdfa_memory_budget_bytes'),
+      `${t}: memory in use within the budget`);
+  }
+  const rejectedBefore = value((await metricsOf(replicas.r1.url)).families, 'brdfa_rejections_total', { reason: 'not_found' }) ?? 0;
+  await call(replicas.r1.url, 'GET', '/api/sessions/r1.ffffffffffffffff/stats');
+  const rejectedAfter = value((await metricsOf(replicas.r1.url)).families, 'brdfa_rejections_total', { reason: 'not_found' });
+  check(rejectedAfter === rejectedBefore + 1, `a 404 moves brdfa_rejections_total{reason="not_found"} ${rejectedBefore} -> ${rejectedAfter}`);
+
+  console.log('\n-- stopping one replica (SIGTERM: it drains, then exits)');
+  const victim = sessions[0].tag;
+  const frameCount = () => streams.map((s) => s.frames);
+  replicas[victim].proc.kill('SIGTERM');
+  check(await waitFor(async () => (await fetch(`${replicas[victim].url}/api/ready`)).status === 503, 3000),
+    `${victim} answers /api/ready 503 while draining`);
+  const refused = await call(replicas[victim].url, 'POST', '/api/sessions', { json: scene(7) });
+  check(refused.status === 503 && refused.json?.error === 'draining', `${victim} refuses a new session: ${refused.status} ${refused.json?.error}`);
+  const stillServed = await call(base, 'GET', `/api/sessions/${sessions[0].id}/stats`, { expect: victim });
+  check(stillServed.status === 200, `${victim} still answers its own session while draining`);
+  // The balancer takes the draining replica out of the pool within its check interval.
+  await sleep(2500);
+  const during = await call(base, 'POST', '/api/sessions', { json: scene(8) });
+  check(during.status === 201 && during.replica !== victim, `a new session during the drain goes elsewhere (${during.replica})`);
+  if (during.status === 201) await call(base, 'DELETE', `/api/sessions/${during.json.id}`, { expect: during.replica });
+  const victimStreams = streams.filter((_, i) => sessions[i].tag === victim);
+  check(await waitFor(() => replicas[victim].exited !== null, 15000), `${victim} exited after its drain`);
+  check(replicas[victim].exited?.code === 0, `${victim} exit code ${JSON.stringify(replicas[victim].exited)}`);
+  check(victimStreams.every((s) => s.ended), `${victim}'s streams ended with it`);
+  const mark = frameCount();
+  check(await waitFor(() => streams.every((s, i) => sessions[i].tag === victim || s.frames >= mark[i] + 2), 30000),
+    'the other replicas\' sessions keep streaming');
+  for (const s of sessions) {
+    const r = await call(base, 'GET', `/api/sessions/${s.id}/stats`, s.tag === victim ? {} : { expect: s.tag });
+    if (s.tag === victim) {
+      check(r.status === 404 && r.json?.error === 'not_found', `a session of the stopped replica is a clear 404 (${r.status} ${r.body.slice(0, 120)})`);
+    } else {
+      check(r.status === 200, `${s.id} still answers (${r.status})`);
+    }
+  }
+  for (const s of sessions.filter((x) => x.tag !== victim)) {
+    const r = await call(base, 'PATCH', `/api/sessions/${s.id}/scene`, { json: { render: { exposure: 0.5 } }, expect: s.tag });
+    check(r.status === 200, `patch of ${s.id} after the stop -> ${r.status}`);
+  }
+  streams.forEach((s) => s.stop());
+  await Promise.all(streams.map((s) => s.done));
+
+  console.log('\n-- balancer log (replica = backend/server)');
+  console.log(lb.log.split('\n').filter((l) => l.includes('brdfa')).slice(-12).join('\n'));
+  exitCode = failures === 0 ? 0 : 1;
+  console.log(`\n${requestLog.length} requests logged; ${failures} failed check(s)`);
+} catch (e) {
+  console.log(`FAIL ${e.stack}`);
+  exitCode = 1;
+} finally {
+  for (const c of children) if (c.exited === null) c.proc.kill('SIGTERM');
+  await sleep(300);
+  for (const c of children) {
+    if (c.exited === null) await waitFor(() => c.exited !== null, 8000);
+    if (c.exited === null) c.proc.kill('SIGKILL');
+    if (exitCode !== 0) console.log(`---- ${c.name} log tail ----\n${c.log.slice(-3000)}`);
+  }
+  rmSync(dataDir, { recursive: true, force: true });
+}
+process.exit(exitCode);
