@@ -70,8 +70,13 @@ export const uploadAsset = (file, kind = '') => {
   return request('POST', '/api/assets', { form });
 };
 
-/** 201 {id, scene}. `scene` is optional (all defaults). */
-export const createSession = (scene) => request('POST', '/api/sessions', scene === undefined ? {} : { json: scene });
+/**
+ * 201 {id, scene}. `scene` is optional (all defaults). `colocate`: a session the new one must
+ * live beside (behind the replicas' balancer, docs/deploy.md: a difference needs both on one server).
+ */
+export const createSession = (scene, colocate) =>
+  request('POST', colocate ? `/api/sessions?colocate=${seg(colocate)}` : '/api/sessions',
+    scene === undefined ? {} : { json: scene });
 /** 200 {id, stats, stream_clients, scene}; 404 when the server forgot it (restart). */
 export const getSession = (session) => request('GET', `/api/sessions/${seg(session)}`);
 /** 204. With `keepalive` the request outlives the page (unload: sendBeacon cannot DELETE). */

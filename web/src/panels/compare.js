@@ -159,7 +159,8 @@ export function mountCompare(el) {
       const index = state.selected;
       b = { id: null, index };
       const scene = mirror();
-      const created = await api.createSession(scene);
+      // Beside A: behind several replicas the difference needs both sessions on one server.
+      const created = await api.createSession(scene, state.session);
       b.id = created.id;
       lastSent = JSON.stringify(scene);
       el.dataset.session = created.id;
