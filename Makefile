@@ -6,16 +6,21 @@ HOST ?= 127.0.0.1
 BUILD ?= build
 BUILD_TYPE ?= RelWithDebInfo
 JOBS ?= $(shell nproc)
+# DEPS_MODE=build installs only what building needs (docker/install-deps.sh --build: no
+# browser, no test framework); empty installs everything, tests included.
+DEPS_MODE ?=
+# Extra arguments to the first cmake configure of $(BUILD), e.g. CMAKE_ARGS="-DBRDFA_BUILD_TESTS=OFF".
+CMAKE_ARGS ?=
 
 .PHONY: all deps web build run test bench soak sanitize clean
 
 all: build
 
 deps:
-	@sh docker/install-deps.sh
+	@sh docker/install-deps.sh $(if $(DEPS_MODE),--$(DEPS_MODE))
 
 $(BUILD)/CMakeCache.txt: | deps
-	cmake -S . -B $(BUILD) -DCMAKE_BUILD_TYPE=$(BUILD_TYPE)
+	cmake -S . -B $(BUILD) -DCMAKE_BUILD_TYPE=$(BUILD_TYPE) $(CMAKE_ARGS)
 
 build: deps web $(BUILD)/CMakeCache.txt
 	cmake --build $(BUILD) -j $(JOBS)
