@@ -563,6 +563,9 @@ async function checks(tmp, setServer) {
   });
   const runEnv = { ...cleanEnv };
   for (const [k, v] of Object.entries(env)) runEnv[k] = remap(v);
+  // As `docker run -e BRDFA_REPLICA=...` or the StatefulSet's env: the tag without a flag.
+  const replicaTag = `deploytest${marker.slice(-4)}`;
+  runEnv.BRDFA_REPLICA = replicaTag;
   const uid = /^\d+$/.test(userName) ? Number(userName) : users[userName];
   const gidPart = user.split(':')[1];
   const gid = gidPart === undefined ? uid : /^\d+$/.test(gidPart) ? Number(gidPart) : users[gidPart];
@@ -606,6 +609,15 @@ async function checks(tmp, setServer) {
   let hj = {};
   try { hj = JSON.parse(health.body.toString('utf8')); } catch { /* reported below */ }
   record('d', 'GET /api/health', health.status === 200 && hj.status === 'ok', `${health.status} ${hj.status ?? ''} device ${hj.device?.name ?? '?'} (${hj.device?.type ?? '?'})`);
+  // Features of servers with --replica (issue 14); an older binary is reported, not failed.
+  const tag = health.headers['x-brdfa-replica'];
+  rows.push(['d', 'BRDFA_REPLICA from the environment', tag === undefined ? 'info' : tag === replicaTag ? 'ok' : 'FAIL',
+    tag === undefined ? 'no X-Brdfa-Replica header: this server predates --replica' : `X-Brdfa-Replica: ${tag}`]);
+  if (tag !== undefined && tag !== replicaTag) failed++;
+  const ready = await httpGet(port, '/api/ready');
+  rows.push(['d', 'GET /api/ready (readiness probe)', ready.status === 200 ? 'ok' : ready.status === 404 ? 'info' : 'FAIL',
+    ready.status === 404 ? '404: this server predates /api/ready' : `${ready.status}`]);
+  if (![200, 404].includes(ready.status)) failed++;
   const brdfs = await httpGet(port, '/api/brdfs');
   record('d', 'built-in BRDFs from the image\'s shaders/', brdfs.status === 200 && brdfs.body.toString('utf8').includes(probeBrdf),
     `${brdfs.status}, probe ${probeBrdf} ${brdfs.body.toString('utf8').includes(probeBrdf) ? 'listed' : 'NOT listed'}`);
