@@ -17,7 +17,8 @@
 //
 //   node tests/deploy/dockerfile.mjs --root SOURCE_DIR --build BUILD_DIR [--dockerfile F] [--keep]
 //
-// Exit 0: every check passed; 1: one failed; 77: no Debian machine (dpkg, apt lists, make, cmake).
+// Exit 0: every check passed; 1: one failed; 77: skipped (no dpkg, apt lists, make or cmake here,
+// or --build is a sanitizer build).
 import { spawn, spawnSync } from 'node:child_process';
 import crypto from 'node:crypto';
 import fs from 'node:fs';
@@ -290,6 +291,13 @@ async function main() {
       console.log(`SKIP: ${tool} not found; this test needs a Debian machine with the build tools`);
       process.exit(77);
     }
+  }
+  // The image ships a Release build: a sanitizer build's libraries (libasan, libubsan) and its
+  // environment (ASAN_OPTIONS, LD_PRELOAD in make sanitize) are not the image's.
+  const cache = path.join(build, 'CMakeCache.txt');
+  if (fs.existsSync(cache) && /^BRDFA_SANITIZE:BOOL=ON$/m.test(fs.readFileSync(cache, 'utf8'))) {
+    console.log('SKIP: a sanitizer build; the image holds Release binaries');
+    process.exit(77);
   }
   if (run('apt-cache', ['show', 'libvulkan1']).status !== 0) {
     console.log('SKIP: no apt package lists here (apt-get update); the runtime packages cannot be resolved');
