@@ -17,7 +17,7 @@ libglm-dev libtinyobjloader-dev libcpp-httplib-dev libssl-dev libbrotli-dev zlib
 nlohmann-json3-dev libstb-dev libtinyexr-dev libopenexr-dev \
 nodejs npm"
 # Running on this machine (lavapipe) and testing (GoogleTest, the browser tests' Chromium).
-RUN_TEST_PACKAGES="mesa-vulkan-drivers libgtest-dev chromium"
+RUN_TEST_PACKAGES="mesa-vulkan-drivers libgtest-dev chromium haproxy"
 
 # Wanted but not required: blender-data ships eight CC0 equirectangular EXR worlds that the
 # server offers as environments blender_<name> when present (issue 4). Tried once per machine.

@@ -17,4 +17,7 @@ while [ "$i" -lt "$n" ]; do
   i=$((i + 1))
 done
 echo "# deploy/k8s/haproxy-cfg.sh $n: the StatefulSet brdfa's $n replicas (regenerate when scaling)"
-exec sh "$(dirname "$0")/../haproxy/make-haproxy-cfg.sh" --dns --bind :8080 "$@"
+# replica-gone.http (a copy of deploy/haproxy's: kustomize reads only this folder) is mounted
+# beside haproxy.cfg from the same ConfigMap.
+exec sh "$(dirname "$0")/../haproxy/make-haproxy-cfg.sh" --dns --bind :8080 \
+  --gone-file /usr/local/etc/haproxy/replica-gone.http "$@"

@@ -13,6 +13,7 @@
 //   node tests/deploy/k8s.mjs --root SOURCE_DIR
 import { spawnSync } from 'node:child_process';
 import fs from 'node:fs';
+import os from 'node:os';
 import path from 'node:path';
 
 const argv = process.argv.slice(2);
@@ -165,7 +166,8 @@ function main() {
     (p.httpGet.port !== 'http' || c.ports.some((x) => x.name === 'http' && x.containerPort === port));
   record('readiness GET /api/ready', probe(c.readinessProbe, '/api/ready'), `${c.readinessProbe?.httpGet?.path} :${c.readinessProbe?.httpGet?.port}`);
   record('liveness GET /api/health', probe(c.livenessProbe, '/api/health'), `${c.livenessProbe?.httpGet?.path} :${c.livenessProbe?.httpGet?.port}`);
-  const drain = Number(arg('--drain-seconds') ?? 25);
+  const drain = Number(arg('--drain-seconds'));
+  record('SIGTERM drains', drain > 0, `--drain-seconds ${arg('--drain-seconds')}`);
   record('grace period > drain', pod.terminationGracePeriodSeconds >= drain + 5, `${pod.terminationGracePeriodSeconds} s for a ${drain} s drain`);
   const mount = (c.volumeMounts ?? []).find((m) => m.mountPath === '/data');
   const vol = (pod.volumes ?? []).find((v) => v.name === mount?.name);
@@ -186,6 +188,13 @@ function main() {
   const n = sts.spec.replicas;
   const gen = spawnSync('sh', [path.join(dir, 'haproxy-cfg.sh'), String(n)], { encoding: 'utf8' });
   const committed = fs.readFileSync(path.join(dir, 'haproxy.cfg'), 'utf8');
+  // The balancer's 404 for a gone replica's ids: the same answer as deploy/haproxy's, mounted
+  // beside haproxy.cfg from the same ConfigMap.
+  const gone = fs.readFileSync(path.join(dir, 'replica-gone.http'), 'utf8');
+  record('replica-gone.http = deploy/haproxy/replica-gone.http',
+    gone === fs.readFileSync(path.join(dir, '../haproxy/replica-gone.http'), 'utf8') &&
+    (kustomization.configMapGenerator ?? []).some((g) => (g.files ?? []).includes('replica-gone.http')) &&
+    committed.includes('errorfile 503 /usr/local/etc/haproxy/replica-gone.http'), 'in the ConfigMap, named by haproxy.cfg');
   record(`haproxy.cfg = haproxy-cfg.sh ${n}`, gen.status === 0 && gen.stdout === committed,
     gen.status !== 0 ? gen.stderr.trim() : gen.stdout === committed ? `${committed.split('\n').length} lines` : 'differs: run sh deploy/k8s/haproxy-cfg.sh N > deploy/k8s/haproxy.cfg');
   const names = [...committed.matchAll(/^\s*use_backend replica_(\S+) if/gm)].map((m) => m[1]);
@@ -216,7 +225,12 @@ function main() {
 
   if (has('haproxy')) {
     const env = { ...process.env, POD_NAMESPACE: 'brdfa', CLUSTER_DOMAIN: 'cluster.local' };
-    const chk = spawnSync('haproxy', ['-c', '-f', path.join(dir, 'haproxy.cfg')], { encoding: 'utf8', env });
+    // As mounted in the pod: the ConfigMap's replica-gone.http beside haproxy.cfg.
+    const tmp = fs.mkdtempSync(path.join(os.tmpdir(), 'brdfa-k8s-'));
+    fs.writeFileSync(path.join(tmp, 'haproxy.cfg'), fs.readFileSync(path.join(dir, 'haproxy.cfg'), 'utf8')
+      .replaceAll('/usr/local/etc/haproxy/replica-gone.http', path.join(dir, 'replica-gone.http')));
+    const chk = spawnSync('haproxy', ['-c', '-f', path.join(tmp, 'haproxy.cfg')], { encoding: 'utf8', env });
+    fs.rmSync(tmp, { recursive: true, force: true });
     record('haproxy -c', chk.status === 0, (chk.stdout + chk.stderr).trim().split('\n').at(-1));
   } else {
     record('haproxy -c', null, 'haproxy not installed');
