@@ -40,6 +40,16 @@ bool readWholeFile(const std::filesystem::path& path, std::string& out) {
   return true;
 }
 
+std::shared_ptr<const BrdfEntry> makeEntry(const std::string& name, std::string source, BrdfDefinition definition,
+                                           bool builtin) {
+  auto entry = std::make_shared<BrdfEntry>();
+  entry->name = name;
+  entry->source = std::move(source);
+  entry->definition = std::make_shared<const BrdfDefinition>(std::move(definition));
+  entry->builtin = builtin;
+  return entry;
+}
+
 std::string errorText(const Error& e) {
   std::string msg = e.message;
   for (const Diagnostic& d : e.diagnostics) msg += "\n  line " + std::to_string(d.line) + ": " + d.message;
@@ -86,12 +96,7 @@ std::vector<std::string> BrdfLibrary::loadBuiltins(const std::string& dir) {
       messages.push_back("skipping " + path.string() + ": " + errorText(parsed.error()));
       return;
     }
-    auto entry = std::make_shared<BrdfEntry>();
-    entry->name = name;
-    entry->source = std::move(text);
-    entry->definition = std::make_shared<const BrdfDefinition>(std::move(parsed.value()));
-    entry->builtin = true;
-    loaded[name] = std::move(entry);
+    loaded[name] = makeEntry(name, std::move(text), std::move(parsed.value()), true);
   });
   std::lock_guard lock(mutex_);
   for (auto& [name, entry] : loaded) entries_[name] = entry;
@@ -170,12 +175,7 @@ void BrdfLibrary::rescanUserDirLocked(std::vector<std::string>* log) {
           broken[name] = BrokenBrdf{name, std::move(text), parsed.takeError()};
           return;
         }
-        auto entry = std::make_shared<BrdfEntry>();
-        entry->name = name;
-        entry->source = std::move(text);
-        entry->definition = std::make_shared<const BrdfDefinition>(std::move(parsed.value()));
-        entry->builtin = false;
-        loaded[name] = std::move(entry);
+        loaded[name] = makeEntry(name, std::move(text), std::move(parsed.value()), false);
       })) {
     if (log) log->insert(log->end(), messages.begin(), messages.end());
     return;  // an unreadable folder changes nothing

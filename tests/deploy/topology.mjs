@@ -215,6 +215,22 @@ try {
   const unknown = await call(base, 'GET', `/api/sessions/${sessions[0].tag}.0000000000000000/stats`, { expect: sessions[0].tag });
   check(unknown.status === 404, 'an id the replica does not hold is 404 from that replica');
 
+  console.log('\n-- one-shot renders and batch jobs spread by load');
+  const renders = await Promise.all([0, 1, 2].map((i) => call(base, 'POST', '/api/render',
+    { json: { scene: { ...scene(i), render: { width: 32, height: 32 } }, spp: 64, format: 'png' } })));
+  check(renders.every((r) => r.status === 200), `three concurrent one-shot renders: ${renders.map((r) => r.status).join(' ')}`);
+  const renderReplicas = new Set(renders.map((r) => r.replica));
+  check(renderReplicas.size >= 2, `concurrent one-shot renders spread over replicas: ${[...renderReplicas].join(', ')}`);
+  const job = await call(base, 'POST', '/api/jobs/validate', { json: { names: ['lambert'] } });
+  check(job.status === 202 && job.json?.id?.startsWith(`${job.replica}.job-`), `a batch job's id carries its replica: ${job.json?.id}`);
+  let jobDone = false;
+  for (let i = 0; i < 100 && !jobDone; i++) {
+    const j = await call(base, 'GET', `/api/jobs/${job.json.id}`, { expect: job.replica, label: 'job poll' });
+    jobDone = j.status === 200 && j.json?.state === 'done';
+    if (!jobDone) await sleep(300);
+  }
+  check(jobDone, `job ${job.json?.id} polled through the balancer to done`);
+
   console.log('\n-- the shared data folder');
   const brdf = 'analytic\n::begin parameters\ncolor Kd .5 .5 .5\n::end parameters\n::begin shader\n' +
     'vec3 BRDF(vec3 L, vec3 V, vec3 N, vec3 X, vec3 Y) { return Kd / 3.14159265; }\n::end shader\n';
