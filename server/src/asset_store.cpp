@@ -1,5 +1,7 @@
 #include "brdfa_server/asset_store.h"
 
+#include <sys/stat.h>
+
 #include <algorithm>
 #include <array>
 #include <chrono>
@@ -348,6 +350,7 @@ std::string AssetStore::loadOne(const std::string& id) {
     return "its file " + data.filename().string() + " does not have the recorded size";
   if (Result<void> r = renderer_->registerAsset(id, record->kind, data.string()); !r) return r.error().message;
   std::lock_guard lock(mutex_);
+  if (uploads_.count(id)) return "";  // picked up twice: counted once
   storedBytes_ += record->bytes;
   uploads_[id] = std::move(*record);
   return "";
@@ -541,6 +544,7 @@ Result<AssetRecord> AssetStore::add(const AssetUpload& up, AssetRejection& rejec
     std::lock_guard lock(mutex_);
     if (auto full = storageFull()) return *full;
     rec.id = newId(kind);
+    writing_.insert(rec.id);
     ++reserved_;
     reservedBytes_ += up.size;
   }
@@ -554,6 +558,7 @@ Result<AssetRecord> AssetStore::add(const AssetUpload& up, AssetRejection& rejec
   if (written) written = renderer_->registerAsset(rec.id, rec.kind, data.string());
 
   std::lock_guard lock(mutex_);
+  writing_.erase(rec.id);
   --reserved_;
   reservedBytes_ -= up.size;
   if (!written) {
@@ -567,7 +572,35 @@ Result<AssetRecord> AssetStore::add(const AssetUpload& up, AssetRejection& rejec
   return rec;
 }
 
+void AssetStore::refreshFromDisk() const {
+  std::lock_guard refresh(refreshMutex_);
+  struct stat st {};
+  if (::stat(dir_.c_str(), &st) != 0) return;
+  const int64_t stamp = int64_t(st.st_mtim.tv_sec) * 1'000'000'000 + st.st_mtim.tv_nsec;
+  const int64_t now = std::chrono::duration_cast<std::chrono::nanoseconds>(
+                          std::chrono::system_clock::now().time_since_epoch()).count();
+  // A new metadata file (a rename into the folder) changes its mtime; a change in the same clock
+  // tick as the last look would not, so a stamp under a second old is never trusted.
+  if (stamp == seenDirStamp_ && now - stamp > 1'000'000'000) return;
+  seenDirStamp_ = stamp;
+  std::vector<std::string> fresh;
+  {
+    std::lock_guard lock(mutex_);
+    std::error_code ec;
+    for (fs::directory_iterator it(dir_, ec), end; !ec && it != end; it.increment(ec)) {
+      const fs::path& p = it->path();
+      const std::string stem = p.stem().string();
+      if (p.extension() == ".json" && validId(stem) && !uploads_.count(stem) && !writing_.count(stem))
+        fresh.push_back(stem);
+    }
+  }
+  for (const std::string& id : fresh)
+    if (std::string why = const_cast<AssetStore*>(this)->loadOne(id); !why.empty())
+      std::fprintf(stderr, "warning: upload %s stored by another server skipped: %s\n", id.c_str(), why.c_str());
+}
+
 std::vector<AssetRecord> AssetStore::list(std::optional<AssetKind> kind) const {
+  refreshFromDisk();
   std::vector<AssetRecord> out;
   std::lock_guard lock(mutex_);
   for (AssetKind k : kKinds) {
@@ -596,6 +629,7 @@ std::vector<AssetRecord> AssetStore::list(std::optional<AssetKind> kind) const {
 }
 
 std::optional<AssetRecord> AssetStore::find(const std::string& id) const {
+  refreshFromDisk();
   {
     std::lock_guard lock(mutex_);
     if (auto it = uploads_.find(id); it != uploads_.end()) return it->second;

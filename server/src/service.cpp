@@ -149,6 +149,8 @@ Result<std::unique_ptr<Service>> Service::create(const ServerConfig& config, std
 }
 
 SceneResolver Service::resolver(std::shared_ptr<const BrdfDefinition> inlineBrdf) const {
+  // Another replica's uploads since the last look become names a scene may use.
+  if (assets) assets->refreshFromDisk();
   SceneResolver r;
   r.library = &library;
   r.inlineBrdf = std::move(inlineBrdf);

@@ -3,8 +3,8 @@
 // deploy/haproxy/make-haproxy-cfg.sh. Through the balancer's port it creates six sessions,
 // streams from each and patches each; checks that every request reached the replica whose tag
 // the session id carries (X-Brdfa-Replica), that a BRDF saved through one replica is listed by
-// all and a delete seen by all, that /metrics parses with a Prometheus text-format parser and its
-// counters move, and that stopping one replica (SIGTERM: it drains) leaves the others streaming
+// all, a delete seen by all and an upload usable by all, that /metrics parses with a Prometheus
+// text-format parser and its counters move, and that stopping one replica (SIGTERM: it drains) leaves the others streaming
 // while its own sessions answer 404. Every request is logged with the replica that served it.
 //
 //   node tests/deploy/topology.mjs --server build/server/brdfa-server --root .
@@ -252,6 +252,21 @@ try {
   for (const t of tags) {
     const got = await call(replicas[t].url, 'GET', '/api/brdfs/topology_shared');
     check(got.status === 404, `replica ${t} no longer has it (${got.status})`);
+  }
+
+  // An upload through one replica is a mesh a scene on another may use, without a restart.
+  const octahedron = 'v 1 0 0\nv -1 0 0\nv 0 1 0\nv 0 -1 0\nv 0 0 1\nv 0 0 -1\n' +
+    'f 1 3 5\nf 3 2 5\nf 2 4 5\nf 4 1 5\nf 3 1 6\nf 2 3 6\nf 4 2 6\nf 1 4 6\n';
+  const form = new FormData();
+  form.append('file', new Blob([octahedron], { type: 'text/plain' }), 'octahedron.obj');
+  const upRes = await fetch(`${replicas.r1.url}/api/assets`, { method: 'POST', body: form });
+  const uploaded = await upRes.json();
+  check(upRes.status === 201 && typeof uploaded.id === 'string', `mesh uploaded through r1: ${upRes.status} ${uploaded.id}`);
+  for (const t of ['r2', 'r3']) {
+    const meshScene = { ...scene(5), objects: [{ mesh: uploaded.id, brdf: 'lambert' }] };
+    const r = await call(replicas[t].url, 'POST', '/api/sessions', { json: meshScene });
+    check(r.status === 201, `replica ${t} renders r1's new upload ${uploaded.id} (${r.status} ${r.status === 201 ? '' : r.body.slice(0, 160)})`);
+    if (r.status === 201) await call(replicas[t].url, 'DELETE', `/api/sessions/${r.json.id}`);
   }
 
   console.log('\n-- /metrics');

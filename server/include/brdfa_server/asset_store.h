@@ -10,6 +10,7 @@
 
 #include <cstdint>
 #include <map>
+#include <set>
 #include <memory>
 #include <mutex>
 #include <nlohmann/json.hpp>
@@ -87,8 +88,15 @@ class AssetStore {
 
   // Every asset: built-ins, Blender worlds, uploads; grouped by kind (mesh, texture,
   // environment), then source in that order, uploads by creation time.
+  // Both first pick up uploads stored since by another replica on a shared folder
+  // (refreshFromDisk).
   std::vector<AssetRecord> list(std::optional<AssetKind> kind = std::nullopt) const;
   std::optional<AssetRecord> find(const std::string& id) const;
+
+  // Registers the uploads that other servers sharing the folder stored since the last look
+  // (their metadata file is the acknowledgment: written after the data file). Cheap when the
+  // folder is unchanged: one stat(). Uploads are never deleted, so nothing is unregistered.
+  void refreshFromDisk() const;
 
   // The folder of stored uploads: <dataDir>/assets.
   const std::string& directory() const { return dir_; }
@@ -111,6 +119,9 @@ class AssetStore {
   mutable std::mutex mutex_;
   std::map<std::string, AssetRecord> uploads_;  // by id
   std::map<std::string, AssetRecord> blender_;  // by name
+  std::set<std::string> writing_;  // ids this server is storing now (not another's to pick up)
+  mutable std::mutex refreshMutex_;  // order: refreshMutex_ before mutex_
+  mutable int64_t seenDirStamp_ = -2;  // the folder's mtime (ns) at the last refreshFromDisk
   size_t reserved_ = 0;          // uploads being written (count toward the cap)
   uint64_t reservedBytes_ = 0;
   uint64_t storedBytes_ = 0;
