@@ -24,6 +24,10 @@ constexpr bool kSanitized = false;
 #else
 constexpr bool kSanitized = false;
 #endif
+// The time bounds below are the plain build's. Under AddressSanitizer the server's own code runs
+// 2-3x slower (and `make sanitize` may share the cores with other tests), so a replaced render
+// worker takes longer to restore the sessions: what that build checks is memory, not seconds.
+constexpr double kTimeScale = kSanitized ? 3.0 : 1.0;
 
 namespace {
 
@@ -286,7 +290,7 @@ TEST_F(HostileDevice, EachAttackGetsItsStatusWhileAnotherSessionStreams) {
     if (!out.body.is_object()) out.body = json::object();
     const auto end = Clock::now();
     const double seconds = std::chrono::duration<double>(end - start).count();
-    EXPECT_LT(seconds, 15.0) << attack.name;
+    EXPECT_LT(seconds, 15.0 * kTimeScale) << attack.name;
     EXPECT_NE(std::find(attack.statuses.begin(), attack.statuses.end(), out.status), attack.statuses.end())
         << attack.name << ": " << out.status << " " << out.body.dump();
     if (out.status >= 400) {
@@ -307,9 +311,9 @@ TEST_F(HostileDevice, EachAttackGetsItsStatusWhileAnotherSessionStreams) {
     std::this_thread::sleep_for(std::chrono::milliseconds(2500));
     const double gap = watch.longestGapSeconds(start, end);
     const double next = watch.firstPartAfter(end);
-    EXPECT_LT(gap, 2.0) << attack.name << ": the streaming session stalled";
+    EXPECT_LT(gap, 2.0 * kTimeScale) << attack.name << ": the streaming session stalled";
     EXPECT_GE(next, 0.0) << attack.name << ": no frame after the attack";
-    EXPECT_LT(next, 2.5) << attack.name;
+    EXPECT_LT(next, 2.5 * kTimeScale) << attack.name;
     const double peakMiB = double(peak.load()) / (1 << 20);
     // Under AddressSanitizer resident sizes are mostly shadow and quarantine (the server applies
     // no memory budget to its workers there): the bound is checked in the plain build.
