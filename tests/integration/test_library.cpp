@@ -273,8 +273,11 @@ TEST(Library, SigkillDuringSavesLeavesOnlyCompleteFiles) {
     std::string n = b["name"];
     EXPECT_TRUE(b["builtin"] == true || n == "crash_a" || n == "crash_b") << "unexpected entry " << b.dump();
   }
+  // A temp file the kill left behind may stay until a start 10 minutes later (on a shared folder
+  // a young one may be another replica's write in progress), but it is never listed or read.
   for (const auto& e : fs::directory_iterator(fs::path(dir.path) / "brdfs"))
-    EXPECT_EQ(e.path().extension(), ".brdf") << "left over after restart: " << e.path();
+    EXPECT_TRUE(e.path().extension() == ".brdf" || e.path().filename().string().rfind(".tmp-", 0) == 0)
+        << "left over after restart: " << e.path();
   EXPECT_EQ(s->terminate(), 0);
 }
 
