@@ -127,7 +127,7 @@ int runRendererBench(const std::string& sourceDir, int rounds) {
   }
   header("Frames (512x512, GGX in the sky)");
   row("resolve + readback (tone-mapped RGBA8)", median(readMs), "ms");
-  row("PNG encode (zlib level 1, Sub filter)", median(pngMs), "ms", std::to_string(pngBytes / 1024) + " KiB");
+  row("PNG encode (libdeflate level 1, Sub filter)", median(pngMs), "ms", std::to_string(pngBytes / 1024) + " KiB");
   return 0;
 }
 

@@ -23,8 +23,8 @@
 #include <cstring>
 #include <stdexcept>
 
-// The renderer compiles stb_image_write static (image_codec.cpp), so this test-only copy has
-// the functions' external names to itself.
+// The renderer writes its PNGs itself (image_codec.cpp): stb_image_write is the tests' own,
+// an independent encoder for the inputs.
 #define STB_IMAGE_WRITE_IMPLEMENTATION
 #include <stb/stb_image_write.h>
 
