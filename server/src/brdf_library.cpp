@@ -145,15 +145,38 @@ void BrdfLibrary::rescanUserDirLocked(std::vector<std::string>* log) {
   std::map<std::string, std::shared_ptr<const BrdfEntry>, std::less<>> loaded;
   std::map<std::string, BrokenBrdf, std::less<>> broken;
   std::map<std::string, std::shared_ptr<const BrdfEntry>, std::less<>> current;
+  std::map<std::string, BrokenBrdf, std::less<>> currentBroken;
   {
     std::lock_guard lock(mutex_);
     current = entries_;
+    currentBroken = broken_;
   }
+  std::map<std::string, FileStamp, std::less<>> stamps;
   if (!forEachBrdfFile(userDir_, messages, [&](const std::string& name, const std::filesystem::path& path) {
         auto it = current.find(name);
         if (it != current.end() && it->second->builtin) {
           messages.push_back("skipping " + path.string() + ": a built-in BRDF has that name");
           return;
+        }
+        // A file not replaced since the last scan (same inode, size and mtime: every save is a
+        // new file renamed over the old) keeps its entry unread, so a young folder stamp, which
+        // rescans on every lookup, costs a stat per file rather than a read and parse.
+        struct stat st {};
+        if (::stat(path.c_str(), &st) == 0) {
+          const FileStamp stamp{uint64_t(st.st_ino), int64_t(st.st_size),
+                                int64_t(st.st_mtim.tv_sec) * 1'000'000'000 + st.st_mtim.tv_nsec};
+          stamps[name] = stamp;
+          auto seen = fileStamps_.find(name);
+          if (seen != fileStamps_.end() && seen->second == stamp) {
+            if (it != current.end()) {
+              loaded[name] = it->second;
+              return;
+            }
+            if (auto b = currentBroken.find(name); b != currentBroken.end()) {
+              broken[name] = b->second;
+              return;
+            }
+          }
         }
         std::string text;
         if (!readWholeFile(path, text)) {
@@ -180,6 +203,7 @@ void BrdfLibrary::rescanUserDirLocked(std::vector<std::string>* log) {
     if (log) log->insert(log->end(), messages.begin(), messages.end());
     return;  // an unreadable folder changes nothing
   }
+  fileStamps_ = std::move(stamps);
   std::lock_guard lock(mutex_);
   // The folder is the truth for user BRDFs: what it no longer holds is gone, what it holds now
   // is what was last written there.

@@ -100,6 +100,13 @@ class BrdfLibrary {
   void rescanUserDirLocked(std::vector<std::string>* log);
   mutable std::mutex refreshMutex_;  // order: refreshMutex_ before mutex_
   mutable int64_t seenDirStamp_ = -2;
+  // Each user file as the last scan saw it (refreshMutex_).
+  struct FileStamp {
+    uint64_t inode = 0;
+    int64_t size = 0, mtimeNs = 0;
+    bool operator==(const FileStamp&) const = default;
+  };
+  std::map<std::string, FileStamp, std::less<>> fileStamps_;
 
   mutable std::mutex mutex_;
   // Serializes file writes with the map update, so the file on disk and the entry agree.
