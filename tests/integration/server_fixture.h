@@ -15,6 +15,20 @@
 
 namespace brdfa::itest {
 
+// True in the AddressSanitizer build (`make sanitize`), where the server's own code runs 2-3x
+// slower: tests that bound a time scale it there, since that build checks memory, not seconds.
+#if defined(__SANITIZE_ADDRESS__)
+inline constexpr bool kSanitizedBuild = true;
+#elif defined(__has_feature)
+#if __has_feature(address_sanitizer)
+inline constexpr bool kSanitizedBuild = true;
+#else
+inline constexpr bool kSanitizedBuild = false;
+#endif
+#else
+inline constexpr bool kSanitizedBuild = false;
+#endif
+
 // The server process itself lives in tests/support (the bench uses it too); this wrapper
 // starts the binary under test from the source tree.
 class ServerProcess : public testsupport::ServerProcess {

@@ -13,21 +13,10 @@
 #include "server_fixture.h"
 
 namespace brdfa::itest {
-#if defined(__SANITIZE_ADDRESS__)
-constexpr bool kSanitized = true;
-#elif defined(__has_feature)
-#if __has_feature(address_sanitizer)
-constexpr bool kSanitized = true;
-#else
-constexpr bool kSanitized = false;
-#endif
-#else
-constexpr bool kSanitized = false;
-#endif
 // The time bounds below are the plain build's. Under AddressSanitizer the server's own code runs
 // 2-3x slower (and `make sanitize` may share the cores with other tests), so a replaced render
 // worker takes longer to restore the sessions: what that build checks is memory, not seconds.
-constexpr double kTimeScale = kSanitized ? 3.0 : 1.0;
+constexpr double kTimeScale = kSanitizedBuild ? 3.0 : 1.0;
 
 namespace {
 
@@ -317,7 +306,7 @@ TEST_F(HostileDevice, EachAttackGetsItsStatusWhileAnotherSessionStreams) {
     const double peakMiB = double(peak.load()) / (1 << 20);
     // Under AddressSanitizer resident sizes are mostly shadow and quarantine (the server applies
     // no memory budget to its workers there): the bound is checked in the plain build.
-    if (!kSanitized) {
+    if (!kSanitizedBuild) {
       EXPECT_LT(peakMiB, 768.0) << attack.name << ": the server's processes passed --max-memory";
     }
     std::printf("%-42s %d in %5.2f s; streaming session's longest gap %.2f s, next frame after %.2f s; peak RSS %.0f MiB\n",

@@ -309,7 +309,10 @@ TEST(Library, StartupTimeDoesNotGrowWithSavedBrdfs) {
   RecordProperty("startup_ms_empty", std::to_string(emptyMs));
   RecordProperty("startup_ms_400", std::to_string(fullMs));
   std::fprintf(stderr, "start-up: %.0f ms empty, %.0f ms with 400 saved BRDFs\n", emptyMs, fullMs);
-  EXPECT_LE(fullMs, emptyMs * 1.2 + 150.0) << "empty " << emptyMs << " ms, 400 BRDFs " << fullMs << " ms";
+  // Parsing 400 files is allowed 150 ms (compiling them would take seconds). The sanitizer
+  // build's instrumented parser takes 1-3 ms a file: the bound is checked in the plain build.
+  if (!kSanitizedBuild)
+    EXPECT_LE(fullMs, emptyMs * 1.2 + 150.0) << "empty " << emptyMs << " ms, 400 BRDFs " << fullMs << " ms";
 }
 
 TEST(Library, SigtermDuringABatchJobExitsCleanly) {
