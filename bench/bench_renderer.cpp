@@ -31,6 +31,68 @@ Scene ggxScene(const std::string& sourceDir, bool visibleBackground, int samples
   return s;
 }
 
+double mean(const std::vector<double>& v) {
+  double sum = 0;
+  for (double x : v) sum += x;
+  return v.empty() ? 0 : sum / double(v.size());
+}
+
+// Where a pass's time goes: the hidden-background view's scene again, in a renderer with
+// RendererOptions::profilePasses (each phase its own timed submission) and without splitting,
+// interleaved with `plain` (the same scene in the benchmark's renderer, alone, so unsplit too).
+// The shade kernel's time is split into a per-pixel fixed part and the samples' part by a second
+// profiled view at 1 sample/pass: fixed = shade(1) - perSample, perSample = (shade(16) -
+// shade(1)) / 15. Means, not medians, so that the parts add up: the error estimate's resolve
+// runs every ~200 ms, not every pass.
+int passBreakdown(const std::string& sourceDir, int rounds, RenderView& plain) {
+  RendererOptions options;
+  options.shaderDir = sourceDir + "/shaders";
+  options.profilePasses = true;
+  options.submissionTargetMs = 0;
+  auto renderer = Renderer::create(options);
+  if (!renderer) return 1;
+  std::unique_ptr<RenderView> views[2];  // 16 and 1 samples/pass
+  for (int v = 0; v < 2; ++v) {
+    auto view = (*renderer)->createView();
+    if (!view || !(*view)->setScene(ggxScene(sourceDir, false, v == 0 ? 16 : 1))) return 1;
+    for (int i = 0; i < 6; ++i)
+      if (!(*view)->renderPass()) return 1;
+    views[v] = std::move(view.value());
+  }
+  std::vector<double> setup, shade, edge, resolve, other, total, shadeOne, plainMs;
+  for (int i = 0; i < 2 * rounds; ++i) {
+    auto p = views[0]->renderPass();
+    auto one = views[1]->renderPass();
+    auto q = plain.renderPass();
+    if (!p || !one || !q) return 1;
+    const PassBreakdown& b = p->breakdown;
+    setup.push_back(b.setupMs);
+    shade.push_back(b.shadeMs);
+    edge.push_back(b.edgeMs);
+    resolve.push_back(b.resolveMs);
+    other.push_back(b.otherMs);
+    total.push_back(p->lastPassMs);
+    shadeOne.push_back(one->breakdown.shadeMs);
+    plainMs.push_back(q->lastPassMs);
+  }
+  const double perSample = (mean(shade) - mean(shadeOne)) / 15;
+  header("Where a pass's time goes: GGX sphere, sky, background hidden, 512x512, 16 samples/pass, mean of " +
+         std::to_string(2 * rounds) + " profiled passes");
+  row("G-buffer raster, clears, background (pending only)", mean(setup), "ms");
+  row("shade kernel", mean(shade), "ms");
+  row("  per-pixel fixed part (G-buffer, frame, accumulators)", mean(shadeOne) - perSample, "ms",
+      "from a 1 sample/pass view");
+  row("  16 samples", 16 * perSample, "ms", std::to_string(perSample).substr(0, 5) + " ms per sample");
+  row("edge kernel (background samples of edge pixels)", mean(edge), "ms");
+  row("error estimate resolve (every ~200 ms)", mean(resolve), "ms");
+  row("recording, submissions, fence waits", mean(other), "ms");
+  const double parts = mean(setup) + mean(shade) + mean(edge) + mean(resolve) + mean(other);
+  row("sum of the parts (= profiled pass)", parts, "ms");
+  row("pass time measured without profiling", mean(plainMs), "ms");
+  row("sum of the parts / measured pass", 100.0 * parts / mean(plainMs), "%", "within 90..110");
+  return 0;
+}
+
 }  // namespace
 
 int runRendererBench(const std::string& sourceDir, int rounds) {
@@ -83,6 +145,8 @@ int runRendererBench(const std::string& sourceDir, int rounds) {
       std::to_string(median(visibleMs)).substr(0, 6) + " ms/pass");
   row("ratio renderer / reference (hidden)", 100.0 * median(refMs) / median(hiddenMs), "%", "target >= 80");
   row("ratio renderer / reference (visible)", 100.0 * median(refMs) / median(visibleMs), "%", "target >= 80");
+
+  if (int code = passBreakdown(sourceDir, rounds, *views[0]); code != 0) return code;
 
   // A new BRDF each time (a changed constant, so neither glslang's nor the driver's caches hit).
   std::vector<double> compileMs, firstPassMs, setSceneMs;

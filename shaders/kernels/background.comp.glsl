@@ -3,7 +3,8 @@
 //    radiance L with weight 1 into both half accumulators, so the resolved mean is L whatever
 //    the object pixels' sample counts (it is deterministic: no need to redo it every pass);
 //  - every pass with anti-aliasing (frame.w = samples this pass, frame.z the first one's index),
-//    over the objects' screen bounds and that pass's slice: where this slice sees no object,
+//    over the objects' screen bounds, or the list of edge pixels once it is known, and that
+//    pass's slice: where this slice sees no object,
 //    frame.w samples of L are added (or written, on the first pass) to the halves like the
 //    shade kernel's, so an edge pixel ends up the
 //    average over its sub-pixel positions. This overrides the once-per-restart value there.
@@ -11,21 +12,30 @@
 layout(local_size_x = 8, local_size_y = 8, local_size_z = 1) in;
 
 void main() {
-  uvec2 p = gl_GlobalInvocationID.xy + uvec2(brdfa_pc.target.z & 0xffffu, brdfa_pc.target.z >> 16);
-  if (p.x >= brdfa_pc.frame.x || p.y >= brdfa_pc.frame.y) return;
+  uvec2 p;
+  if (brdfa_pc.target.x != 0u) {
+    // The per-pass use over a list of target.x edge pixels (brdfa_edgePixels), 64 per group,
+    // covered in some slices only: a pixel no slice covers already holds the background
+    // averaged over the first four passes' sub-pixel positions (one per slice, weighted by
+    // their sample counts), an estimate as good as more of the same would give. (A CPU device runs the kernel's code for every pixel
+    // dispatched, hit or not: over the bounds, ~10 ms a pass at 512^2.)
+    uint k = gl_WorkGroupID.x * 64u + gl_LocalInvocationIndex;
+    if (k >= brdfa_pc.target.x) return;
+    uint listed = texelFetch(brdfa_edgePixels, int(k)).x;
+    p = uvec2(listed % brdfa_pc.frame.x, listed / brdfa_pc.frame.x);
+  } else {
+    p = gl_GlobalInvocationID.xy + uvec2(brdfa_pc.target.z & 0xffffu, brdfa_pc.target.z >> 16);
+    if (p.x >= brdfa_pc.frame.x || p.y >= brdfa_pc.frame.y) return;
+  }
   uint pixel = brdfa_pixelIndex(p);
-  if (brdfa_gPosition(pixel).w != 0.0) return;  // covered by an object
+  if (brdfa_gSurface(pixel).x != 0u) return;  // covered by an object
 
-  vec2 at = vec2(p) + 0.5 + brdfa_pc.tone.zw;
-  vec2 ndc = vec2(2.0 * at.x / float(brdfa_pc.frame.x) - 1.0,
-                  1.0 - 2.0 * at.y / float(brdfa_pc.frame.y));  // row 0 is the top
-  vec3 dir = normalize(brdfa_pc.cameraForward.xyz + ndc.x * brdfa_pc.cameraRight.xyz +
-                       ndc.y * brdfa_pc.cameraUp.xyz);
-  vec3 radiance = brdfa_environmentUnit(brdfa_toEnvironment(dir)) * brdfa_environmentIntensity();
+  vec3 radiance = brdfa_environmentUnit(brdfa_toEnvironment(brdfa_viewRay(p, brdfa_pc.tone.zw))) *
+                  brdfa_environmentIntensity();
   uint count = brdfa_pc.frame.w;
   if (count == 0u) {
-    brdfa_accum[pixel] = vec4(radiance, 1.0);
-    brdfa_accum[brdfa_halfOffset(1u) + pixel] = vec4(radiance, 1.0);
+    brdfa_accumStore(0u, pixel, vec4(radiance, 1.0));
+    brdfa_accumStore(1u, pixel, vec4(radiance, 1.0));
     return;
   }
   // The pass's samples first .. first + count - 1 go to the halves by parity, as in the shade
@@ -33,13 +43,7 @@ void main() {
   uint first = brdfa_pc.frame.z;
   float countA = float((first + count + 1u) / 2u - (first + 1u) / 2u);
   float countB = float(count) - countA;
-  vec4 valueA = vec4(radiance * countA, countA);
-  vec4 valueB = vec4(radiance * countB, countB);
-  if (brdfa_pc.target.w != 0u) {
-    brdfa_accum[pixel] = valueA;
-    brdfa_accum[brdfa_halfOffset(1u) + pixel] = valueB;
-  } else {
-    brdfa_accum[pixel] += valueA;
-    brdfa_accum[brdfa_halfOffset(1u) + pixel] += valueB;
-  }
+  bool overwrite = brdfa_pc.target.w != 0u;
+  brdfa_accumulate(0u, pixel, vec4(radiance * countA, countA), overwrite);
+  brdfa_accumulate(1u, pixel, vec4(radiance * countB, countB), overwrite);
 }

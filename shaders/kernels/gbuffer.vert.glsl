@@ -12,14 +12,12 @@ layout(set = 1, binding = 1) uniform BrdfaObject {
 
 layout(push_constant) uniform BrdfaRasterPush { mat4 viewProj; } brdfa_raster;
 
-layout(location = 0) out vec3 outWorldPos;
 layout(location = 1) out vec3 outNormal;
 layout(location = 2) out vec2 outTexCoord;
 layout(location = 3) out vec4 outTangent;
 
 void main() {
   vec4 world = brdfa_object.model * vec4(inPosition, 1.0);
-  outWorldPos = world.xyz;
   outNormal = mat3(brdfa_object.normalMatrix) * inNormal;
   outTangent = vec4(mat3(brdfa_object.model) * inTangent.xyz, inTangent.w);
   outTexCoord = inTexCoord;

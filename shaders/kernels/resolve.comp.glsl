@@ -13,13 +13,13 @@ void main() {
   vec3 partial = vec3(0.0);  // (variance, luminance, pixel count)
   if (p.x < brdfa_pc.frame.x && p.y < brdfa_pc.frame.y) {
     uint i = brdfa_pixelIndex(p);
-    vec4 a = brdfa_accum[i];
-    vec4 b = brdfa_accum[brdfa_halfOffset(1u) + i];
+    vec4 a = brdfa_accumLoad(0u, i);
+    vec4 b = brdfa_accumLoad(1u, i);
     float n = a.w + b.w;
     vec3 mean = n > 0.0 ? (a.rgb + b.rgb) / n : vec3(0.0);  // guard: no samples yet
     brdfa_outRgba8[i] = brdfa_packSrgb8(mean, brdfa_pc.tone.x, brdfa_pc.tone.y);  // exposure, tone map
     if (brdfa_pc.target.z != 0u) brdfa_outFloat[i] = vec4(mean, 1.0);
-    bool objectPixel = brdfa_gPosition(i).w != 0.0;
+    bool objectPixel = brdfa_gSurface(i).x != 0u;
     if (objectPixel && a.w > 0.0 && b.w > 0.0) {
       float d = brdfa_luminance(a.rgb / a.w) - brdfa_luminance(b.rgb / b.w);
       float variance = d * d / ((1.0 / a.w + 1.0 / b.w) * n);

@@ -63,28 +63,39 @@ float brdfa_misEnvironmentFraction(vec3 V, vec3 N, vec3 X, vec3 Y) {
 #endif
 
 void main() {
-  // The dispatch covers the object's screen bounds, starting at the packed origin.
-  uvec2 p = gl_GlobalInvocationID.xy + uvec2(brdfa_pc.target.z & 0xffffu, brdfa_pc.target.z >> 16);
+  // The dispatch covers a band of 8x8 tiles of the object's screen bounds, starting at the
+  // packed origin; workgroup row y shades the band's tile row (y * step) mod rows, so that the
+  // CPU device's threads each get rows from all over the band (render_view.cpp, renderPass).
+  uint permutation = floatBitsToUint(brdfa_pc.cameraPos.w);
+  uint tileRow = (gl_WorkGroupID.y * (permutation >> 16)) % (permutation & 0xffffu);
+  uvec2 p = uvec2(gl_GlobalInvocationID.x, tileRow * 8u + gl_LocalInvocationID.y) +
+            uvec2(brdfa_pc.target.z & 0xffffu, brdfa_pc.target.z >> 16);
   if (p.x >= brdfa_pc.frame.x || p.y >= brdfa_pc.frame.y) return;
 
   uint pixel = brdfa_pixelIndex(p);
-  vec4 gp = brdfa_gPosition(pixel);
-  if (uint(abs(gp.w) + 0.5) != brdfa_pc.target.x) return;  // another object, or background
-  vec4 gn = brdfa_gNormal(pixel);
-  vec4 gt = brdfa_gTangent(pixel);
-  texCoord = vec2(gn.w, gt.w);
+  uvec2 surface = brdfa_gSurface(pixel);
+  if (brdfa_objectId(surface) != brdfa_pc.target.x) return;  // another object, or background
+#if defined(BRDFA_TANGENT_FRAME) || defined(BRDFA_TEXCOORD)
+  uvec4 detail = brdfa_gDetail(pixel);
+  texCoord = uintBitsToFloat(detail.yz);
+#else
+  texCoord = vec2(0.0);  // never read: the BRDF does not name it (brdf_features.cpp)
+#endif
 
   // The frame is turned into the environment's frame (see lib/environment.glsl), so samples
-  // look the environment up without a per-sample rotation.
-  vec3 N = brdfa_toEnvironment(normalize(gn.xyz));
-  vec3 V = brdfa_toEnvironment(normalize(brdfa_pc.cameraPos.xyz - gp.xyz));
+  // look the environment up without a per-sample rotation. V is the reverse of the view ray
+  // through this slice's sub-pixel position, where the raster pass found the surface.
+  vec3 N = brdfa_toEnvironment(brdfa_octDecode(surface.y));
+  vec3 V = brdfa_toEnvironment(-brdfa_viewRay(p, brdfa_pc.tone.zw));
   // guard: interpolated normals near a silhouette can face slightly away from the viewer;
   // bend N until V is just above the horizon so every BRDF sees a valid outgoing direction.
   float NdotV = dot(N, V);
   if (NdotV < 1e-3) N = normalize(N + V * (1e-3 - NdotV));
   vec3 X, Y;
 #if defined(BRDFA_TANGENT_FRAME)
-  brdfa_tangentFrame(N, brdfa_toEnvironment(gt.xyz), gp.w < 0.0 ? -1.0 : 1.0, X, Y);
+  // A missing tangent (detail.w) reads as 0, which brdfa_tangentFrame replaces by a basis from N.
+  vec3 tangent = detail.w != 0u ? vec3(0.0) : brdfa_toEnvironment(brdfa_octDecode(detail.x));
+  brdfa_tangentFrame(N, tangent, (surface.x & BRDFA_LEFT_HANDED) != 0u ? -1.0 : 1.0, X, Y);
 #else
   // The BRDF never reads X or Y (brdf_features.cpp): any orthonormal frame serves the
   // isotropic hemisphere samplers, and this one needs no tangent.
@@ -213,15 +224,10 @@ void main() {
   float intensity = brdfa_environmentIntensity();
   vec4 valueA = vec4((sumAll - sumB) * intensity, float(keptAll - keptB));
   vec4 valueB = vec4(sumB * intensity, float(keptB));
-  uint offsetB = brdfa_halfOffset(1u) + pixel;
-  if (brdfa_pc.target.w != 0u) {
-    // First pass after a restart: overwrite this pixel's halves instead of adding, so a change
-    // of BRDF or parameters needs no clear of the whole buffer.
-    brdfa_accum[pixel] = valueA;
-    brdfa_accum[offsetB] = valueB;
-  } else {
-    brdfa_accum[pixel] += valueA;
-    brdfa_accum[offsetB] += valueB;
-  }
+  // The first pass after a restart overwrites this pixel's halves instead of adding, so a
+  // change of BRDF or parameters needs no clear of the whole buffer.
+  bool overwrite = brdfa_pc.target.w != 0u;
+  brdfa_accumulate(0u, pixel, valueA, overwrite);
+  brdfa_accumulate(1u, pixel, valueB, overwrite);
   if (dropped != 0u) atomicAdd(brdfa_nanSamples, dropped);
 }

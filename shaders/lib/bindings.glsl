@@ -2,17 +2,17 @@
 // by every compute kernel (shade, background, resolve). Names carry the brdfa_ prefix so they
 // can never collide with names in a user's BRDF file.
 
-// G-buffer, written once per camera/geometry change by the raster pass and copied into this
-// buffer (storage-buffer loads are far cheaper than storage-image loads on CPU devices).
-// Three planes of width*height texels each:
-//   0 position: xyz world position, w = object id (1-based) * tangent handedness; 0 = background
-//   1 normal:   xyz world shading normal (faces the camera), w = texCoord.x
-//   2 tangent:  xyz world tangent, w = texCoord.y
+// Binding 0 and 3 are plain storage buffers for the analysis and check kernels, which pass
+// their inputs and results through them. Render views bind them too, but read and write the
+// same memory through the texel views below: on a CPU device (lavapipe) a storage-buffer load
+// or store is a per-lane loop with a bounds check per component, while a texel fetch is one
+// gather of the whole texel and an image store one loop per lane (bench --only renderer).
 layout(std430, set = 0, binding = 0) readonly buffer BrdfaGbuffer { vec4 brdfa_gbuffer[]; };
 
 // Two half accumulators (sample i of a pixel goes to half i & 1, each half with its own random
 // sequence): rgb = sum of radiance samples, a = number of samples kept. The difference of
-// their means estimates the error of the combined mean.
+// their means estimates the error of the combined mean. Texel i is half A of pixel i, texel
+// planeSize + i its half B (brdfa_accumTexels below).
 layout(std430, set = 0, binding = 3) buffer BrdfaAccum { vec4 brdfa_accum[]; };
 layout(std430, set = 0, binding = 4) buffer BrdfaCounters { uint brdfa_nanSamples; uint brdfa_counterPad[3]; };
 layout(set = 0, binding = 5) uniform samplerCube brdfa_envMap;
@@ -26,8 +26,26 @@ layout(std430, set = 0, binding = 8) writeonly buffer BrdfaPartials { vec4 brdfa
 layout(set = 0, binding = 9) uniform usamplerBuffer brdfa_envTable;
 uvec2 brdfa_envEntry(uint i) { return texelFetch(brdfa_envTable, int(i)).xy; }
 
+// The G-buffer of this pass's sub-pixel slice, written once per camera or geometry change by
+// the raster pass (kernels/gbuffer.frag.glsl) and copied into two planes:
+//  - surface (binding 10), RG32UI: x = object id (1-based), | 0x80000000 where the tangent
+//    frame is left-handed, 0 = background; y = the shading normal (world space, facing the
+//    camera), octahedral (lib/gbuffer_encoding.glsl);
+//  - detail (binding 11), RGBA32UI: x = the tangent (world space, octahedral), y, z = texCoord
+//    (float bits), w = 1 where the mesh has no usable tangent. Read only by programs whose BRDF
+//    uses the tangent frame or texCoord.
+// The view direction is not stored: the surface point lies on the pixel's view ray
+// (brdfa_viewRay), which gives V exactly.
+layout(set = 0, binding = 10) uniform usamplerBuffer brdfa_gSurfaceTexels;
+layout(set = 0, binding = 11) uniform usamplerBuffer brdfa_gDetailTexels;
+layout(set = 0, binding = 12, rgba32f) uniform imageBuffer brdfa_accumTexels;
+// Pixels whose coverage differs between the G-buffer slices (an object in some, background in
+// others), R32UI pixel indices: the edge kernel's work list once every slice is known (CPU
+// devices).
+layout(set = 0, binding = 13) uniform usamplerBuffer brdfa_edgePixels;
+
 layout(push_constant) uniform BrdfaPush {
-  vec4 cameraPos;      // xyz
+  vec4 cameraPos;      // xyz; w (shade, as uint bits): rows | step << 16 of the dispatch's band
   vec4 cameraRight;    // xyz, scaled by tan(fov/2) * aspect
   vec4 cameraUp;       // xyz, scaled by tan(fov/2)
   vec4 cameraForward;  // xyz, unit
@@ -36,12 +54,32 @@ layout(push_constant) uniform BrdfaPush {
   uvec4 target;        // x object id (1-based), y render.seed,
                        // z shade: dispatch origin x | y << 16; resolve: write float output,
                        // w first pass after a restart (overwrite instead of add)
-  vec4 tone;           // x exposure scale 2^exposure, y tone map (0 clamp, 1 reinhard, 2 aces)
+  vec4 tone;           // x exposure scale 2^exposure, y tone map (0 clamp, 1 reinhard, 2 aces),
+                       // zw the slice's sub-pixel offset (shade, background)
 } brdfa_pc;
 
 uint brdfa_pixelIndex(uvec2 p) { return p.y * brdfa_pc.frame.x + p.x; }
 uint brdfa_planeSize() { return brdfa_pc.frame.x * brdfa_pc.frame.y; }
 uint brdfa_halfOffset(uint halfIndex) { return halfIndex * brdfa_planeSize(); }
-vec4 brdfa_gPosition(uint i) { return brdfa_gbuffer[i]; }
-vec4 brdfa_gNormal(uint i) { return brdfa_gbuffer[brdfa_planeSize() + i]; }
-vec4 brdfa_gTangent(uint i) { return brdfa_gbuffer[2u * brdfa_planeSize() + i]; }
+uvec2 brdfa_gSurface(uint i) { return texelFetch(brdfa_gSurfaceTexels, int(i)).xy; }
+uvec4 brdfa_gDetail(uint i) { return texelFetch(brdfa_gDetailTexels, int(i)); }
+vec4 brdfa_accumLoad(uint halfIndex, uint pixel) {
+  return imageLoad(brdfa_accumTexels, int(brdfa_halfOffset(halfIndex) + pixel));
+}
+void brdfa_accumStore(uint halfIndex, uint pixel, vec4 value) {
+  imageStore(brdfa_accumTexels, int(brdfa_halfOffset(halfIndex) + pixel), value);
+}
+// Adds `value` to a half's texel, or overwrites it on the first pass after a restart (so a
+// change of BRDF or parameters needs no clear of the whole buffer).
+void brdfa_accumulate(uint halfIndex, uint pixel, vec4 value, bool overwrite) {
+  if (!overwrite) value += brdfa_accumLoad(halfIndex, pixel);
+  brdfa_accumStore(halfIndex, pixel, value);
+}
+
+// Unit direction of the view ray through pixel p at sub-pixel offset `jitter` (pixels), as the
+// raster pass sampled that slice: row 0 is the top of the image.
+vec3 brdfa_viewRay(uvec2 p, vec2 jitter) {
+  vec2 at = vec2(p) + 0.5 + jitter;
+  vec2 ndc = vec2(2.0 * at.x / float(brdfa_pc.frame.x) - 1.0, 1.0 - 2.0 * at.y / float(brdfa_pc.frame.y));
+  return normalize(brdfa_pc.cameraForward.xyz + ndc.x * brdfa_pc.cameraRight.xyz + ndc.y * brdfa_pc.cameraUp.xyz);
+}

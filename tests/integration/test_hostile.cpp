@@ -151,7 +151,7 @@ class MemoryBudgetShrink : public ServerTest {
  protected:
   static void SetUpTestSuite() {
     server_ = std::make_unique<ServerProcess>();
-    startError_ = server_->start({"--idle-timeout", "60", "--max-memory", "768"});
+    startError_ = server_->start({"--idle-timeout", "60", "--max-memory", "680"});
   }
 };
 

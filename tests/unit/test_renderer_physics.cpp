@@ -100,6 +100,35 @@ TEST_F(RendererPhysics, WhiteLambertInFurnaceIsOneWithUniformSampling) {
   EXPECT_GT(*f.stats.relError, 0.0);
 }
 
+// texCoord reaches the BRDF (the G-buffer's detail plane, fetched only for files that name it):
+// a Lambertian with albedo (u, v, 0) in the furnace shows the sphere's UVs, exactly, with
+// cosine sampling. The sphere's u = 0.5 + atan(z, x) / 2 pi faces the camera at the middle of
+// each row and v runs from the top to the bottom, so a row through the centre spans u around
+// 0.5 and a column v over most of 0..1 (0.18..0.82 away from the silhouette at 64^2).
+TEST_F(RendererPhysics, TexCoordReachesTheBrdfAsTheMeshsUvs) {
+  auto view = renderer_->createView().value();
+  ASSERT_TRUE(view->setScene(furnaceScene(inlineBrdf(R"(analytic
+::begin shader
+const float PI = 3.14159265358979323846;
+vec3 BRDF(vec3 L, vec3 V, vec3 N, vec3 X, vec3 Y) { return vec3(texCoord, 0.0) / PI; }
+::end shader
+)"), 64, 16)).ok());
+  Frame f = renderToConvergence(*view);
+  auto px = interiorRgb(f);
+  ASSERT_GT(px.size(), 500u);
+  float minU = 1, maxU = 0, minV = 1, maxV = 0;
+  for (const Vec3& c : px) {
+    ASSERT_GE(c[0], -1e-6f);
+    ASSERT_LE(c[0], 1.0f + 1e-5f);
+    ASSERT_EQ(c[2], 0.0f);
+    minU = std::min(minU, c[0]), maxU = std::max(maxU, c[0]);
+    minV = std::min(minV, c[1]), maxV = std::max(maxV, c[1]);
+  }
+  // Without texCoord every pixel would read (0, 0).
+  EXPECT_GT(maxU - minU, 0.3f) << minU << ".." << maxU;
+  EXPECT_GT(maxV - minV, 0.5f) << minV << ".." << maxV;
+}
+
 // Anti-aliasing: the visibility is rasterized at four sub-pixel positions across passes, so a
 // silhouette pixel is the fraction of it the sphere covers. A white Lambert sphere in the
 // furnace (exactly 1 where covered) against the hidden environment (0): the image sums to the

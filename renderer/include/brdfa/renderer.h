@@ -38,6 +38,9 @@ struct RendererOptions {
   // SPIR-V cache on disk (empty: memory only). loadCache false only writes it (--no-cache-load).
   std::string cacheDir;
   bool loadCache = true;
+  // Measures where each pass's time goes (FrameStats::breakdown): every phase of a pass is
+  // submitted and waited for on its own, which adds a little per phase. For benchmarks (bench/).
+  bool profilePasses = false;
   // Points Mesa's shader disk cache here (sets MESA_SHADER_CACHE_DIR for this process unless it
   // is already set) before the device opens; empty leaves the driver's default.
   std::string driverCacheDir;
@@ -85,6 +88,16 @@ struct CompileInfo {
 };
 
 // Progress of one RenderView's accumulation.
+// Where the latest pass's time went, with RendererOptions::profilePasses (else all 0). Device
+// phases are host-timed submissions (lavapipe's timestamps read ~0 for long dispatches).
+struct PassBreakdown {
+  double setupMs = 0;        // raster of pending G-buffer slices, clears, the once-per-restart background
+  double shadeMs = 0;        // the objects' shade kernels
+  double edgeMs = 0;         // background samples of edge pixels (anti-aliasing)
+  double resolveMs = 0;      // the error estimate's resolve, on the device or the host
+  double otherMs = 0;        // the rest of the pass's wall time: recording, submission, fence waits
+};
+
 struct FrameStats {
   uint64_t spp = 0;           // samples per pixel accumulated since the last scene change
   uint64_t passes = 0;        // progressive passes since the last scene change
@@ -94,6 +107,7 @@ struct FrameStats {
   // time of its longest one (wall time from submit to done where the queue has no timestamps).
   uint64_t submissions = 0;
   double maxSubmissionMs = 0;
+  PassBreakdown breakdown;    // of the latest pass, with RendererOptions::profilePasses
   uint64_t nanSamples = 0;    // NaN/Inf samples dropped since the last scene change
   // Relative RMS error of the image, estimated from two statistically independent half
   // accumulators: sqrt(mean over object pixels of the mean's variance) / mean luminance.

@@ -61,16 +61,13 @@ TexelBuffer& TexelBuffer::operator=(TexelBuffer&& o) noexcept {
   if (this != &o) {
     reset();
     buffer_ = std::move(o.buffer_);
-    std::swap(device_, o.device_);
-    std::swap(view_, o.view_);
+    view_ = std::move(o.view_);
   }
   return *this;
 }
 
 void TexelBuffer::reset() {
-  if (device_ && view_) vkDestroyBufferView(device_, view_, nullptr);
-  view_ = VK_NULL_HANDLE;
-  device_ = VK_NULL_HANDLE;
+  view_.reset();
   buffer_.reset();
 }
 
@@ -80,12 +77,36 @@ Result<TexelBuffer> TexelBuffer::create(VkContext& ctx, const void* data, VkDevi
   if (!buffer) return buffer.takeError();
   t.buffer_ = std::move(buffer.value());
   std::memcpy(t.buffer_.mapped(), data, bytes);
+  auto view = TexelView::create(ctx, t.buffer_, format, 0, VK_WHOLE_SIZE);
+  if (!view) return view.takeError();
+  t.view_ = std::move(view.value());
+  return t;
+}
+
+TexelView& TexelView::operator=(TexelView&& o) noexcept {
+  if (this != &o) {
+    reset();
+    std::swap(device_, o.device_);
+    std::swap(view_, o.view_);
+  }
+  return *this;
+}
+
+void TexelView::reset() {
+  if (device_ && view_) vkDestroyBufferView(device_, view_, nullptr);
+  view_ = VK_NULL_HANDLE;
+  device_ = VK_NULL_HANDLE;
+}
+
+Result<TexelView> TexelView::create(VkContext& ctx, const Buffer& buffer, VkFormat format, VkDeviceSize offset,
+                                    VkDeviceSize range) {
+  TexelView t;
   t.device_ = ctx.device();
   VkBufferViewCreateInfo vci{VK_STRUCTURE_TYPE_BUFFER_VIEW_CREATE_INFO};
-  vci.buffer = t.buffer_.handle();
+  vci.buffer = buffer.handle();
   vci.format = format;
-  vci.offset = 0;
-  vci.range = VK_WHOLE_SIZE;
+  vci.offset = offset;
+  vci.range = range;
   BRDFA_VK_TRY(vkCreateBufferView(t.device_, &vci, nullptr, &t.view_));
   return t;
 }

@@ -37,6 +37,27 @@ class Buffer {
   void* mapped_ = nullptr;
 };
 
+// A view of part of another Buffer as texels of `format` (for a samplerBuffer, usamplerBuffer or
+// imageBuffer). The buffer must outlive the view; `offset` must be a multiple of the device's
+// minTexelBufferOffsetAlignment.
+class TexelView {
+ public:
+  TexelView() = default;
+  ~TexelView() { reset(); }
+  TexelView(TexelView&& o) noexcept { *this = std::move(o); }
+  TexelView& operator=(TexelView&& o) noexcept;
+
+  static Result<TexelView> create(VkContext& ctx, const Buffer& buffer, VkFormat format, VkDeviceSize offset,
+                                  VkDeviceSize range);
+
+  VkBufferView view() const { return view_; }
+  void reset();
+
+ private:
+  VkDevice device_ = VK_NULL_HANDLE;
+  VkBufferView view_ = VK_NULL_HANDLE;
+};
+
 // A read-only uniform texel buffer: memory the host fills once at creation, seen by shaders
 // through a view of `format` (a samplerBuffer / usamplerBuffer read with texelFetch).
 class TexelBuffer {
@@ -48,13 +69,12 @@ class TexelBuffer {
 
   static Result<TexelBuffer> create(VkContext& ctx, const void* data, VkDeviceSize bytes, VkFormat format);
 
-  VkBufferView view() const { return view_; }
+  VkBufferView view() const { return view_.view(); }
   void reset();
 
  private:
   Buffer buffer_;
-  VkDevice device_ = VK_NULL_HANDLE;
-  VkBufferView view_ = VK_NULL_HANDLE;
+  TexelView view_;  // declared after buffer_: destroyed before it
 };
 
 struct ImageSpec {

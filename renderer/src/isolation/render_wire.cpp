@@ -49,7 +49,7 @@ using nlohmann::json;
 // The hand-written conversions below list every field; a field added to one of these types
 // must be added there too (then update the size here). x86-64 Linux, the one target built.
 #if defined(__x86_64__) && defined(__linux__)
-static_assert(sizeof(FrameStats) == 200, "FrameStats changed: update toJson/statsFromJson");
+static_assert(sizeof(FrameStats) == 240, "FrameStats changed: update toJson/statsFromJson");
 static_assert(sizeof(RendererOptions) == 264, "RendererOptions changed: update toJson/optionsFromJson");
 static_assert(sizeof(SceneObject) == 192, "SceneObject changed: update toJson(Scene)/sceneFromJson");
 #endif
@@ -175,7 +175,9 @@ json toJson(const FrameStats& f) {
               {"warnings", f.warnings},
               {"sceneVersion", f.sceneVersion},
               {"submissions", f.submissions},
-              {"maxSubmissionMs", f.maxSubmissionMs}};
+              {"maxSubmissionMs", f.maxSubmissionMs},
+              {"breakdown", json::array({f.breakdown.setupMs, f.breakdown.shadeMs, f.breakdown.edgeMs,
+                                         f.breakdown.resolveMs, f.breakdown.otherMs})}};
 }
 
 FrameStats statsFromJson(const json& j) {
@@ -200,6 +202,13 @@ FrameStats statsFromJson(const json& j) {
   j.at("sceneVersion").get_to(f.sceneVersion);
   j.at("submissions").get_to(f.submissions);
   j.at("maxSubmissionMs").get_to(f.maxSubmissionMs);
+  const json& b = j.at("breakdown");
+  if (!b.is_array() || b.size() != 5) throw json::type_error::create(302, "breakdown: 5 numbers expected", &b);
+  b[0].get_to(f.breakdown.setupMs);
+  b[1].get_to(f.breakdown.shadeMs);
+  b[2].get_to(f.breakdown.edgeMs);
+  b[3].get_to(f.breakdown.resolveMs);
+  b[4].get_to(f.breakdown.otherMs);
   return f;
 }
 
@@ -208,6 +217,7 @@ json toJson(const RendererOptions& o) {
   return json{{"deviceName", o.deviceName},       {"shaderDir", o.shaderDir},
               {"validation", o.validation},       {"resolve", o.resolve},
               {"cacheDir", o.cacheDir},           {"loadCache", o.loadCache},
+              {"profilePasses", o.profilePasses},
               {"driverCacheDir", o.driverCacheDir}, {"compileSeconds", o.compileSeconds},
               {"compileMemoryMiB", o.compileMemoryMiB}, {"compileWorkers", o.compileWorkers},
               {"memoryBudgetBytes", o.memoryBudgetBytes}, {"memoryBudgetLabel", o.memoryBudgetLabel},
@@ -226,6 +236,7 @@ RendererOptions optionsFromJson(const json& j) {
   j.at("resolve").get_to(o.resolve);
   j.at("cacheDir").get_to(o.cacheDir);
   j.at("loadCache").get_to(o.loadCache);
+  j.at("profilePasses").get_to(o.profilePasses);
   j.at("driverCacheDir").get_to(o.driverCacheDir);
   j.at("compileSeconds").get_to(o.compileSeconds);
   j.at("compileMemoryMiB").get_to(o.compileMemoryMiB);

@@ -136,6 +136,9 @@ BrdfFeatures detectFeatures(const BrdfDefinition& brdf) {
   f.textures = false;
   for (const char* t : {"iTexture0", "iTexture1", "iTexture2", "iTexture3"})
     if (countWholeWords(code, t) > 0) f.textures = true;
+  // `##` could paste the name together: counted as used.
+  f.texCoord = brdf.format == BrdfFormat::Legacy || f.textures || countWholeWords(code, "texCoord") > 0 ||
+               code.find("##") != std::string::npos;
 
   if (brdf.format == BrdfFormat::Legacy) {
     // render(L, N, V, textureCord, worldToLocal): the engine built worldToLocal from N and V

@@ -11,6 +11,8 @@ struct BrdfFeatures {
   bool tangentFrame = true;  // BRDF() (or sampleBRDF()) reads its X or Y argument (never for a
                              // legacy render(): the engine's worldToLocal is built from N and V)
   bool textures = true;      // the code names iTexture0..iTexture3
+  bool texCoord = true;      // the code names texCoord (always for a legacy render(), which
+                             // receives it), or a texture (which is looked up by it)
   bool samplerPdf = false;   // the sample section defines float pdfBRDF(...) (our extension)
 };
 

@@ -84,7 +84,7 @@ void resolvePixels(const HostResolveInput& in, uint8_t* rgba8, float* rgba32f, E
       for (int c = 0; c < 3; ++c) rgba32f[4 * i + c] = mean[c];
       rgba32f[4 * i + 3] = 1.0f;
     }
-    if (in.positions[4 * i + 3] != 0.0f && pa[3] > 0 && pb[3] > 0) {
+    if (in.surface[2 * i] != 0 && pa[3] > 0 && pb[3] > 0) {
       // Same estimate as resolve.comp.glsl: (mA - mB)^2 / ((1/nA + 1/nB)(nA + nB)).
       double d = luminance(pa[0] / pa[3], pa[1] / pa[3], pa[2] / pa[3]) -
                  luminance(pb[0] / pb[3], pb[1] / pb[3], pb[2] / pb[3]);

@@ -6,6 +6,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstring>
+#include <numeric>
 
 #include "host_resolve.h"
 #include "scene_check.h"
@@ -28,7 +29,6 @@ constexpr double kErrorRefreshMs = 200; // rel_error is refreshed at least this 
 constexpr double kProbeUnits = 2048;
 constexpr double kGrowth = 4;
 constexpr double kCostDecay = 0.75;
-constexpr double kDispatchMs = 1;  // see renderPass
 constexpr double kTail = 1.25;     // a pass's last submission may take this many budgets
 
 uint32_t groups(uint32_t n, uint32_t size) { return (n + size - 1) / size; }
@@ -77,14 +77,15 @@ Result<void> RenderViewImpl::init() {
   cmd_ = std::move(cmd.value());
 
   // New objects are built before the old ones are released, hence room for two scenes' worth.
-  VkDescriptorPoolSize sizes[4] = {{VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 6 * kMaxJitter},
+  VkDescriptorPoolSize sizes[5] = {{VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 6 * kMaxJitter},
                                    {VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, kMaxJitter + 8 * kMaxObjects},
                                    {VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, 4 * kMaxObjects},
-                                   {VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER, kMaxJitter}};
+                                   {VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER, 4 * kMaxJitter},
+                                   {VK_DESCRIPTOR_TYPE_STORAGE_TEXEL_BUFFER, kMaxJitter}};
   VkDescriptorPoolCreateInfo pci{VK_STRUCTURE_TYPE_DESCRIPTOR_POOL_CREATE_INFO};
   pci.flags = VK_DESCRIPTOR_POOL_CREATE_FREE_DESCRIPTOR_SET_BIT;
   pci.maxSets = kMaxJitter + 2 * kMaxObjects;
-  pci.poolSizeCount = 4;
+  pci.poolSizeCount = 5;
   pci.pPoolSizes = sizes;
   BRDFA_VK_TRY(vkCreateDescriptorPool(ctx.device(), &pci, nullptr, &pool_));
   VkDescriptorSetLayout layouts[kMaxJitter];
@@ -114,11 +115,21 @@ Result<void> RenderViewImpl::resize(uint32_t width, uint32_t height) {
   // Everything below, counted against the renderer's budget before any of it is allocated.
   const VkDeviceSize pixels = VkDeviceSize(width) * height;
   const uint32_t jitter = pixels <= VkDeviceSize(1024) * 1024 ? kMaxJitter : 1;
-  const VkDeviceSize align = std::max<VkDeviceSize>(ctx.limits().minStorageBufferOffsetAlignment, 16);
-  const VkDeviceSize stride = (pixels * 3 * 16 + align - 1) / align * align;
-  const uint64_t bytes = pixels * (3 * 16 + 4)                // G-buffer attachments and depth
+  // Slices and planes start where both a storage-buffer range and a texel view may start.
+  const VkDeviceSize align = std::max<VkDeviceSize>({ctx.limits().minStorageBufferOffsetAlignment,
+                                                     ctx.limits().minTexelBufferOffsetAlignment, 16});
+  auto aligned = [&](VkDeviceSize n) { return (n + align - 1) / align * align; };
+  // Texel views address at most maxTexelBufferElements texels (2^27 on lavapipe, more on GPUs);
+  // the accumulators' two halves are the largest view.
+  if (2 * pixels > ctx.limits().maxTexelBufferElements)
+    return makeError(ErrorCode::InvalidArgument, "a " + std::to_string(width) + "x" + std::to_string(height) +
+                                                     " view is more than this device's texel buffers can address");
+  const VkDeviceSize detailOffset = aligned(pixels * kGbufferSurfaceBytes);
+  const VkDeviceSize stride = aligned(detailOffset + pixels * kGbufferDetailBytes);
+  const uint64_t bytes = pixels * (kGbufferSurfaceBytes + kGbufferDetailBytes + 4)  // raster targets and depth
                          + stride * jitter + pixels * 32      // G-buffer copies, accumulators
-                         + pixels * (4 + 16) + partialCount(width, height) * 16;  // outputs
+                         + pixels * (4 + 16) + partialCount(width, height) * 16  // outputs
+                         + pixels * 4;                        // edge list
   // The old size's share is given back in the same step: a refused size leaves the view as it
   // was, still rendering its old size.
   BRDFA_TRY(r_->exchangeViewMemory(reservedBytes_, bytes,
@@ -126,17 +137,23 @@ Result<void> RenderViewImpl::resize(uint32_t width, uint32_t height) {
   reservedBytes_ = bytes;
   jitterCount_ = jitter;
   sliceStride_ = stride;
+  detailOffset_ = detailOffset;
 
   if (framebuffer_) vkDestroyFramebuffer(d, framebuffer_, nullptr);
   framebuffer_ = VK_NULL_HANDLE;
   width_ = height_ = 0;
 
+  for (TexelView& v : surfaceViews_) v.reset();
+  for (TexelView& v : detailViews_) v.reset();
+  accumView_.reset();
+  edgeView_.reset();
+  edgeListKnown_ = false;
   ImageSpec g;
   g.width = width;
   g.height = height;
-  g.format = VK_FORMAT_R32G32B32A32_SFLOAT;
   g.usage = VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | VK_IMAGE_USAGE_TRANSFER_SRC_BIT;
-  for (Image* img : {&gPosition_, &gNormal_, &gTangent_}) {
+  for (auto [img, format] : {std::pair{&gSurface_, kGbufferSurfaceFormat}, std::pair{&gDetail_, kGbufferDetailFormat}}) {
+    g.format = format;
     auto created = Image::create(ctx, g);
     if (!created) return created.takeError();
     *img = std::move(created.value());
@@ -149,10 +166,10 @@ Result<void> RenderViewImpl::resize(uint32_t width, uint32_t height) {
   if (!depth) return depth.takeError();
   depth_ = std::move(depth.value());
 
-  VkImageView views[4] = {gPosition_.view(), gNormal_.view(), gTangent_.view(), depth_.view()};
+  VkImageView views[3] = {gSurface_.view(), gDetail_.view(), depth_.view()};
   VkFramebufferCreateInfo fci{VK_STRUCTURE_TYPE_FRAMEBUFFER_CREATE_INFO};
   fci.renderPass = r_->gbufferPass();
-  fci.attachmentCount = 4;
+  fci.attachmentCount = 3;
   fci.pAttachments = views;
   fci.width = width;
   fci.height = height;
@@ -160,24 +177,45 @@ Result<void> RenderViewImpl::resize(uint32_t width, uint32_t height) {
   BRDFA_VK_TRY(vkCreateFramebuffer(d, &fci, nullptr, &framebuffer_));
 
   const VkBufferUsageFlags storage = VK_BUFFER_USAGE_STORAGE_BUFFER_BIT;
-  // Four jittered slices (jitterCount_ above) cost 4 x 48 bytes per pixel (50 MB at 512^2);
+  // Four jittered slices (jitterCount_ above) cost 4 x 24 bytes per pixel (25 MB at 512^2);
   // above 1024^2 pixels the memory is not worth it and the image is not anti-aliased (its
   // pixels are small anyway).
   slicesReady_ = 0;
   struct Want { Buffer* buffer; VkDeviceSize size; VkBufferUsageFlags usage; bool host; };
-  // With the host resolve, the host reads the G-buffer and accumulators in place.
-  const bool host = r_->hostResolve();
-  const Want wants[5] = {
-      {&gbuffer_, sliceStride_ * jitterCount_, storage | VK_BUFFER_USAGE_TRANSFER_DST_BIT, host},
-      {&accum_, pixels * 2 * 16, storage | VK_BUFFER_USAGE_TRANSFER_DST_BIT, host},
+  // With the host resolve, the host reads the G-buffer and accumulators in place; on a CPU
+  // device the host also lists the edge pixels from the G-buffer (listEdgePixels), whichever
+  // resolve runs, so both resolves see the same image.
+  const bool host = r_->hostResolve() || r_->ctx().info().type == "cpu";
+  const Want wants[6] = {
+      {&gbuffer_, sliceStride_ * jitterCount_,
+       storage | VK_BUFFER_USAGE_UNIFORM_TEXEL_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT, host},
+      {&accum_, pixels * 2 * 16,
+       storage | VK_BUFFER_USAGE_STORAGE_TEXEL_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT, host},
       {&outRgba8_, pixels * 4, storage, true},
       {&outFloat_, pixels * 16, storage, true},
-      {&partials_, VkDeviceSize(partialCount(width, height)) * 16, storage, true}};
+      {&partials_, VkDeviceSize(partialCount(width, height)) * 16, storage, true},
+      {&edgeList_, pixels * 4, VK_BUFFER_USAGE_UNIFORM_TEXEL_BUFFER_BIT, true}};
   for (const Want& w : wants) {
     auto b = Buffer::create(ctx, w.size, w.usage, w.host);
     if (!b) return b.takeError();
     *w.buffer = std::move(b.value());
   }
+  for (uint32_t slice = 0; slice < jitterCount_; ++slice) {
+    auto surface = TexelView::create(ctx, gbuffer_, kGbufferSurfaceFormat, sliceStride_ * slice,
+                                     pixels * kGbufferSurfaceBytes);
+    if (!surface) return surface.takeError();
+    surfaceViews_[slice] = std::move(surface.value());
+    auto detail = TexelView::create(ctx, gbuffer_, kGbufferDetailFormat, sliceStride_ * slice + detailOffset_,
+                                    pixels * kGbufferDetailBytes);
+    if (!detail) return detail.takeError();
+    detailViews_[slice] = std::move(detail.value());
+  }
+  auto accumView = TexelView::create(ctx, accum_, VK_FORMAT_R32G32B32A32_SFLOAT, 0, VK_WHOLE_SIZE);
+  if (!accumView) return accumView.takeError();
+  accumView_ = std::move(accumView.value());
+  auto edgeView = TexelView::create(ctx, edgeList_, VK_FORMAT_R32_UINT, 0, VK_WHOLE_SIZE);
+  if (!edgeView) return edgeView.takeError();
+  edgeView_ = std::move(edgeView.value());
   width_ = width;
   height_ = height;
   return {};
@@ -188,12 +226,13 @@ void RenderViewImpl::writeViewDescriptors() {
   const VkBufferView table = env_->table.view();
   const std::pair<uint32_t, const Buffer*> buffers[6] = {{0, &gbuffer_},  {3, &accum_},    {4, &counters_},
                                                          {6, &outRgba8_}, {7, &outFloat_}, {8, &partials_}};
-  const VkDeviceSize sliceBytes = VkDeviceSize(width_) * height_ * 3 * 16;
+  const VkDeviceSize sliceBytes = detailOffset_ + VkDeviceSize(width_) * height_ * kGbufferDetailBytes;
   // Every set is written (unused slices alias slice 0) so that no set is ever left invalid.
   for (uint32_t slice = 0; slice < kMaxJitter; ++slice) {
+    const uint32_t s = slice < jitterCount_ ? slice : 0;
     VkDescriptorBufferInfo infos[6];
-    VkWriteDescriptorSet w[8] = {};
-    for (uint32_t i = 0; i < 8; ++i) {
+    VkWriteDescriptorSet w[12] = {};
+    for (uint32_t i = 0; i < 12; ++i) {
       w[i].sType = VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET;
       w[i].dstSet = viewSets_[slice];
       w[i].descriptorCount = 1;
@@ -204,15 +243,19 @@ void RenderViewImpl::writeViewDescriptors() {
       w[i].descriptorType = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER;
       w[i].pBufferInfo = &infos[i];
     }
-    infos[0].offset = (slice < jitterCount_ ? slice : 0) * sliceStride_;
+    infos[0].offset = s * sliceStride_;
     infos[0].range = sliceBytes;
     w[6].dstBinding = 5;
     w[6].descriptorType = VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER;
     w[6].pImageInfo = &env;
-    w[7].dstBinding = 9;
-    w[7].descriptorType = VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER;
-    w[7].pTexelBufferView = &table;
-    vkUpdateDescriptorSets(r_->ctx().device(), 8, w, 0, nullptr);
+    const VkBufferView texels[5] = {table, surfaceViews_[s].view(), detailViews_[s].view(), accumView_.view(),
+                                    edgeView_.view()};
+    for (uint32_t i = 0; i < 5; ++i) {
+      w[7 + i].dstBinding = 9 + i;
+      w[7 + i].descriptorType = i == 3 ? VK_DESCRIPTOR_TYPE_STORAGE_TEXEL_BUFFER : VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER;
+      w[7 + i].pTexelBufferView = &texels[i];
+    }
+    vkUpdateDescriptorSets(r_->ctx().device(), 12, w, 0, nullptr);
   }
 }
 
@@ -369,7 +412,10 @@ Result<void> RenderViewImpl::setScene(const Scene& scene) {
   objects_ = std::move(objects);
   scene_ = scene;
   hasScene_ = true;
-  if (geometryChanged) slicesReady_ = 0;
+  if (geometryChanged) {
+    slicesReady_ = 0;
+    edgeListKnown_ = false;
+  }
   coverRect_ = PixelRect{};
   for (const ObjectState& o : objects_) coverRect_ = unionRect(coverRect_, o.pixels);
   // A new camera, geometry or environment changes coverage or background: clear everything and
@@ -464,13 +510,13 @@ uint32_t RenderViewImpl::sliceForPass(uint64_t pass) const {
 }
 
 void RenderViewImpl::recordRaster(VkCommandBuffer cb, uint32_t slice) {
-  VkClearValue clears[4] = {};
-  clears[3].depthStencil = {1.0f, 0};
+  VkClearValue clears[3] = {};  // surface 0: background
+  clears[2].depthStencil = {1.0f, 0};
   VkRenderPassBeginInfo rbi{VK_STRUCTURE_TYPE_RENDER_PASS_BEGIN_INFO};
   rbi.renderPass = r_->gbufferPass();
   rbi.framebuffer = framebuffer_;
   rbi.renderArea = {{0, 0}, {width_, height_}};
-  rbi.clearValueCount = 4;
+  rbi.clearValueCount = 3;
   rbi.pClearValues = clears;
   vkCmdBeginRenderPass(cb, &rbi, VK_SUBPASS_CONTENTS_INLINE);
   VkViewport vp{0, 0, static_cast<float>(width_), static_cast<float>(height_), 0, 1};
@@ -492,15 +538,14 @@ void RenderViewImpl::recordRaster(VkCommandBuffer cb, uint32_t slice) {
     vkCmdDrawIndexed(cb, o.mesh->indexCount, 1, 0, 0, 0);
   }
   vkCmdEndRenderPass(cb);
-  // Copy the targets into the three planes of this slice of the G-buffer storage buffer.
-  const VkDeviceSize plane = VkDeviceSize(width_) * height_ * 16;
-  const Image* targets[3] = {&gPosition_, &gNormal_, &gTangent_};
-  for (int i = 0; i < 3; ++i) {
+  // Copy the targets into the two planes of this slice of the G-buffer buffer.
+  const std::pair<const Image*, VkDeviceSize> targets[2] = {{&gSurface_, 0}, {&gDetail_, detailOffset_}};
+  for (const auto& [target, offset] : targets) {
     VkBufferImageCopy region{};
-    region.bufferOffset = sliceStride_ * slice + plane * i;
+    region.bufferOffset = sliceStride_ * slice + offset;
     region.imageSubresource = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 0, 1};
     region.imageExtent = {width_, height_, 1};
-    vkCmdCopyImageToBuffer(cb, targets[i]->handle(), VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL, gbuffer_.handle(), 1, &region);
+    vkCmdCopyImageToBuffer(cb, target->handle(), VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL, gbuffer_.handle(), 1, &region);
   }
   slicesReady_ |= 1u << slice;
 }
@@ -520,10 +565,17 @@ void RenderViewImpl::recordBackground(VkCommandBuffer cb, const PixelRect& rect,
   push.frame[3] = count;  // 0: the once-per-restart write
   push.target[2] = rect.x | (rect.y << 16);
   push.target[3] = firstPass ? 1u : 0u;
+  // The per-pass use goes over the edge list once it is known (see the kernel).
+  const bool list = count > 0 && edgeListKnown_;
+  if (list && edgeCount_ == 0) return;
+  push.target[0] = list ? edgeCount_ : 0u;
   vkCmdBindPipeline(cb, VK_PIPELINE_BIND_POINT_COMPUTE, r_->backgroundPipeline(env_->constant || !visible));
   vkCmdBindDescriptorSets(cb, VK_PIPELINE_BIND_POINT_COMPUTE, r_->computeLayout(), 0, 1, &viewSets_[slice], 0, nullptr);
   vkCmdPushConstants(cb, r_->computeLayout(), VK_SHADER_STAGE_COMPUTE_BIT, 0, sizeof(push), &push);
-  vkCmdDispatch(cb, groups(rect.width, kShadeGroup), groups(rect.height, kShadeGroup), 1);
+  if (list)
+    vkCmdDispatch(cb, groups(edgeCount_, kShadeGroup * kShadeGroup), 1, 1);
+  else
+    vkCmdDispatch(cb, groups(rect.width, kShadeGroup), groups(rect.height, kShadeGroup), 1);
 }
 
 void RenderViewImpl::recordPending(VkCommandBuffer cb, uint32_t slice) {
@@ -569,7 +621,7 @@ ErrorSums RenderViewImpl::deviceErrorSums() const {
 HostResolveInput RenderViewImpl::hostResolveInput() const {
   HostResolveInput in;
   in.accum = static_cast<const float*>(accum_.mapped());
-  in.positions = static_cast<const float*>(gbuffer_.mapped());
+  in.surface = static_cast<const uint32_t*>(gbuffer_.mapped());  // slice 0's surface plane
   in.pixels = size_t(width_) * height_;
   in.exposureScale = std::exp2(scene_.render.exposure);
   in.toneMap = scene_.render.toneMap;
@@ -595,8 +647,8 @@ void RenderViewImpl::setRelError(const ErrorSums& sums) {
 // be half empty (a sphere's corners, a torus).
 void RenderViewImpl::measureCoverage() {
   coverageKnown_ = true;
-  const auto* positions = static_cast<const float*>(gbuffer_.mapped());
-  if (!positions) return;  // device-local: every invocation counts as covered
+  const auto* surface = static_cast<const uint32_t*>(gbuffer_.mapped());
+  if (!surface) return;  // device-local: every invocation counts as covered
   for (size_t i = 0; i < objects_.size(); ++i) {
     ObjectState& o = objects_[i];
     const PixelRect& r = o.pixels;
@@ -604,9 +656,28 @@ void RenderViewImpl::measureCoverage() {
     o.cover.assign(size_t(gx) * groups(r.height, kShadeGroup), 0);
     for (uint32_t y = r.y; y < r.y + r.height; ++y)
       for (uint32_t x = r.x; x < r.x + r.width; ++x)
-        if (static_cast<uint32_t>(std::abs(positions[4 * (size_t(y) * width_ + x) + 3]) + 0.5f) == i + 1)
+        if ((surface[2 * (size_t(y) * width_ + x)] & ~kLeftHandedBit) == i + 1)
           ++o.cover[size_t((y - r.y) / kShadeGroup) * gx + (x - r.x) / kShadeGroup];
   }
+}
+
+void RenderViewImpl::listEdgePixels() {
+  const auto* slices = static_cast<const uint8_t*>(gbuffer_.mapped());
+  auto* list = static_cast<uint32_t*>(edgeList_.mapped());
+  const uint32_t all = (1u << jitterCount_) - 1;
+  if (!slices || !list || jitterCount_ < 2 || (slicesReady_ & all) != all) return;
+  uint32_t n = 0;
+  const PixelRect& r = coverRect_;
+  for (uint32_t y = r.y; y < r.y + r.height; ++y)
+    for (uint32_t x = r.x; x < r.x + r.width; ++x) {
+      const size_t pixel = size_t(y) * width_ + x;
+      uint32_t covered = 0;
+      for (uint32_t s = 0; s < jitterCount_; ++s)
+        covered += reinterpret_cast<const uint32_t*>(slices + sliceStride_ * s)[2 * pixel] != 0 ? 1 : 0;
+      if (covered != 0 && covered != jitterCount_) list[n++] = static_cast<uint32_t>(pixel);
+    }
+  edgeCount_ = n;
+  edgeListKnown_ = true;
 }
 
 // A pass is split into submissions of about ctx().submissionTargetMs(fence) of device time each, so
@@ -627,6 +698,8 @@ Result<FrameStats> RenderViewImpl::renderPass() {
   updateDone();
   if (stats_.done()) return stats_;
   const auto t0 = std::chrono::steady_clock::now();
+  // Between passes only, so that how a pass is split into submissions never changes the image.
+  if (!edgeListKnown_) listEdgePixels();
   // Passes after a restart ramp up 1, 2, 4, ... samples to samples_per_frame, so the first
   // frame of a change arrives quickly.
   const uint64_t ramp = stats_.passes < 20 ? (uint64_t(1) << stats_.passes) : UINT64_MAX;
@@ -661,12 +734,33 @@ Result<FrameStats> RenderViewImpl::renderPass() {
   }
 
   ComputePush push = basePush();
+  // V is taken along the view ray through the sub-pixel position this slice was rasterized at.
+  const glm::vec2 jitter = jitterOffset(slice, jitterCount_);
+  push.tone[2] = jitter.x;
+  push.tone[3] = jitter.y;
   const VkPipelineLayout layout = r_->computeLayout();
   // Where the sweep stands: samples done, visible object, workgroup row and column in its bounds.
   uint32_t done = visible.empty() ? count : 0, row = 0, col = 0;
   size_t obj = 0;
   std::vector<double> bandUnits;
   double passDone = 0;  // units shaded so far
+  // With RendererOptions::profilePasses each phase ends its submission, timed into `breakdown`.
+  const bool profile = r_->profilePasses();
+  PassBreakdown breakdown;
+  VkCommandBuffer cb = VK_NULL_HANDLE;
+  auto endPhase = [&](double& phaseMs, uint32_t set) -> Result<void> {
+    if (!profile) return {};
+    memoryBarrier(cb, VK_PIPELINE_STAGE_ALL_COMMANDS_BIT, VK_ACCESS_MEMORY_WRITE_BIT, VK_PIPELINE_STAGE_ALL_COMMANDS_BIT,
+                  VK_ACCESS_MEMORY_READ_BIT | VK_ACCESS_MEMORY_WRITE_BIT);
+    double ms = 0;
+    BRDFA_TRY(cmd_.submitAndWait(&ms, /*viewPass=*/true));
+    phaseMs += ms;
+    auto begun = cmd_.begin();
+    if (!begun) return begun.takeError();
+    cb = *begun;
+    vkCmdBindDescriptorSets(cb, VK_PIPELINE_BIND_POINT_COMPUTE, r_->computeLayout(), 0, 1, &viewSets_[set], 0, nullptr);
+    return {};
+  };
   uint64_t submissions = 0;
   double maxSubmissionMs = 0;
   do {
@@ -677,10 +771,11 @@ Result<FrameStats> RenderViewImpl::renderPass() {
     const bool rasterOnly = targetMs > 0 && !coverageKnown_ && gbuffer_.mapped() && (slicesReady_ & 1u) == 0;
     auto begun = cmd_.begin();
     if (!begun) return begun.takeError();
-    VkCommandBuffer cb = *begun;
-    if (submissions == 0)
+    cb = *begun;
+    if (submissions == 0) {
       recordPending(cb, slice);
-    else  // the accumulators are read-modify-written; earlier submissions' writes come first
+      BRDFA_TRY(endPhase(breakdown.setupMs, slice));
+    } else  // the accumulators are read-modify-written; earlier submissions' writes come first
       memoryBarrier(cb, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_ACCESS_SHADER_WRITE_BIT,
                     VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_ACCESS_SHADER_READ_BIT | VK_ACCESS_SHADER_WRITE_BIT);
     vkCmdBindDescriptorSets(cb, VK_PIPELINE_BIND_POINT_COMPUTE, layout, 0, 1, &viewSets_[slice], 0, nullptr);
@@ -731,21 +826,25 @@ Result<FrameStats> RenderViewImpl::renderPass() {
       push.frame[3] = n;
       vkCmdBindPipeline(cb, VK_PIPELINE_BIND_POINT_COMPUTE, o.kernel->kernel->pipeline());
       vkCmdBindDescriptorSets(cb, VK_PIPELINE_BIND_POINT_COMPUTE, layout, 1, 1, &o.set, 0, nullptr);
-      // A band of rows is dispatched a few rows at a time unless it is the whole bounds:
-      // llvmpipe hands each thread one contiguous run of a dispatch's workgroups (lp_cs_tpool:
-      // two halves on two cores), and a band's top and bottom halves can differ in cost
-      // several times over (near a sphere's pole), while adjacent rows, or the whole object's
-      // top and bottom, are alike. Rows are grouped until a dispatch has kDispatchMs of work,
-      // which keeps the per-dispatch cost (~35 us on lavapipe) small. Measured (lambert, 64
-      // samples/pass, 2 submissions): one dispatch per band cost 25% of the throughput.
-      for (uint32_t r = 0, k; r < rows; r += k) {
-        double work = rows > 1 ? bandUnits[r] : 0;
-        for (k = 1; r + k < rows && (rows == gy || work * msPerUnit_ < kDispatchMs); ++k) work += bandUnits[r + k];
-        // Dispatch origin; images are at most 4096 wide.
-        push.target[2] = (o.pixels.x + col * kShadeGroup) | ((o.pixels.y + (row + r) * kShadeGroup) << 16);
-        vkCmdPushConstants(cb, layout, VK_SHADER_STAGE_COMPUTE_BIT, 0, sizeof(push), &push);
-        vkCmdDispatch(cb, cols, k, 1);
+      // One dispatch per band, its rows permuted: llvmpipe hands each thread one contiguous
+      // run of a dispatch's workgroups (lp_cs_tpool: two halves on two cores), and a band's
+      // top and bottom halves can differ in cost several times over (near a sphere's pole).
+      // Workgroup row y shades the band's row (y * step) mod rows, step ~ 0.618 rows and
+      // coprime to it, so every contiguous run of workgroups takes rows spread over the whole
+      // band and the threads finish together. Measured (GGX, 16 samples/pass, 2 views): rows
+      // grouped into dispatches of ~1 ms instead cost a third more per pass on a busy 2-core
+      // VM, every dispatch waiting for both threads.
+      uint32_t step = 1;
+      if (rows > 2) {
+        step = std::max<uint32_t>(1, static_cast<uint32_t>(std::lround(rows * 0.6180339887)));
+        while (std::gcd(step, rows) != 1) ++step;
       }
+      const uint32_t permutation = rows | (step << 16);  // rows and step are below 4096 / 8
+      std::memcpy(&push.cameraPos[3], &permutation, sizeof permutation);
+      // Dispatch origin; images are at most 4096 wide.
+      push.target[2] = (o.pixels.x + col * kShadeGroup) | ((o.pixels.y + row * kShadeGroup) << 16);
+      vkCmdPushConstants(cb, layout, VK_SHADER_STAGE_COMPUTE_BIT, 0, sizeof(push), &push);
+      vkCmdDispatch(cb, cols, rows, 1);
       units += taken;
       // Objects cover disjoint pixels, so their dispatches need no barrier between them; the
       // next sweep adds to the same pixels and does.
@@ -763,15 +862,18 @@ Result<FrameStats> RenderViewImpl::renderPass() {
         memoryBarrier(cb, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_ACCESS_SHADER_WRITE_BIT,
                       VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_ACCESS_SHADER_READ_BIT | VK_ACCESS_SHADER_WRITE_BIT);
     }
+    BRDFA_TRY(endPhase(breakdown.shadeMs, slice));
     if (done >= count) {
       // Inside the objects' bounds a pixel may be background in this slice and covered in
       // another (an edge): its background samples are taken with the pass, so the pixel is the
       // average over its sub-pixel positions. With one slice nothing changes from pass to pass.
       if (jitterCount_ > 1) recordBackground(cb, coverRect_, slice, count, firstPass);
+      BRDFA_TRY(endPhase(breakdown.edgeMs, 0));
       if (refreshError && !r_->hostResolve()) {
         memoryBarrier(cb, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_ACCESS_SHADER_WRITE_BIT,
                       VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_ACCESS_SHADER_READ_BIT);
         recordResolve(cb, false);
+        BRDFA_TRY(endPhase(breakdown.resolveMs, 0));
       }
     }
     memoryBarrier(cb, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_ACCESS_SHADER_WRITE_BIT,
@@ -809,9 +911,18 @@ Result<FrameStats> RenderViewImpl::renderPass() {
   stats_.maxSubmissionMs = maxSubmissionMs;
   stats_.nanSamples = *static_cast<const uint32_t*>(counters_.mapped());
   sinceErrorMs_ += passMs;
-  if (refreshError)
+  if (refreshError) {
+    const auto tResolve = std::chrono::steady_clock::now();
     setRelError(r_->hostResolve() ? resolveOnHost(hostResolveInput(), nullptr, nullptr) : deviceErrorSums());
+    if (profile) breakdown.resolveMs += msSince(tResolve);
+  }
   updateDone();
+  if (profile) {
+    const double total = msSince(t0);
+    breakdown.otherMs = total - breakdown.setupMs - breakdown.shadeMs - breakdown.edgeMs - breakdown.resolveMs;
+    stats_.lastPassMs = total;
+  }
+  stats_.breakdown = breakdown;
   return stats_;
 }
 

@@ -61,6 +61,11 @@ class RenderViewImpl final : public RenderView {
   size_t partialCount(uint32_t width, uint32_t height) const;
   ComputePush basePush() const;
   void measureCoverage();
+  // Lists the edge pixels of the objects' bounds, background in some slices and covered in
+  // others, once every slice is rasterized and host-visible (CPU devices). From then on the
+  // edge kernel runs over them only: a pixel of the bounds that no slice covers keeps what the
+  // first passes gave it, the background averaged over its sub-pixel positions.
+  void listEdgePixels();
 
   std::shared_ptr<RendererImpl> r_;
   mutable std::mutex mutex_;
@@ -68,17 +73,27 @@ class RenderViewImpl final : public RenderView {
   VkDescriptorPool pool_ = VK_NULL_HANDLE;
   // Anti-aliasing: the visibility is rasterized at kMaxJitter sub-pixel offsets into as many
   // G-buffer slices (lazily, by the first passes after a geometry change), and pass p shades
-  // slice sliceForPass(p). One view descriptor set per slice: binding 0 is that slice.
+  // slice sliceForPass(p). One view descriptor set per slice: bindings 0, 10 and 11 are that
+  // slice. A slice holds the surface plane, then the detail plane at detailOffset_.
   static constexpr uint32_t kMaxJitter = 4;
   uint32_t jitterCount_ = 1;       // slices in use: kMaxJitter, or 1 for images above 1024^2 pixels
   VkDeviceSize sliceStride_ = 0;   // bytes from one slice to the next (offset-aligned)
+  VkDeviceSize detailOffset_ = 0;  // bytes from a slice's start to its detail plane
   uint32_t slicesReady_ = 0;       // bit s: slice s holds the current geometry
   uint32_t sliceForPass(uint64_t pass) const;
   VkDescriptorSet viewSets_[kMaxJitter] = {};
   PixelRect coverRect_;            // union of the objects' screen bounds
   VkFramebuffer framebuffer_ = VK_NULL_HANDLE;
-  Image gPosition_, gNormal_, gTangent_, depth_;
+  Image gSurface_, gDetail_, depth_;
   Buffer gbuffer_, accum_, counters_, outRgba8_, outFloat_, partials_;
+  // Pixel indices of the edge pixels (see listEdgePixels), host-written; room for every pixel.
+  Buffer edgeList_;
+  // Texel views of gbuffer_'s planes per slice and of accum_ (declared after the buffers:
+  // destroyed before them).
+  TexelView surfaceViews_[kMaxJitter], detailViews_[kMaxJitter], accumView_, edgeView_;
+  // edgeList_ holds the current geometry's edge pixels, edgeCount_ of them.
+  bool edgeListKnown_ = false;
+  uint32_t edgeCount_ = 0;
   uint32_t width_ = 0, height_ = 0;
   uint64_t reservedBytes_ = 0;  // of the renderer's view-memory budget, for the current size
 

@@ -39,7 +39,6 @@ constexpr uint64_t kPipelineBytesEstimate = 4ull << 20;
 constexpr uint64_t kDriverGrowthBytes = 40ull << 20;
 // A brdfa-compile-worker between compiles: 33 MiB resident (glslang 11.13, Debian 12).
 constexpr uint64_t kIdleCompileWorkerBytes = 36ull << 20;
-constexpr VkFormat kGbufferFormat = VK_FORMAT_R32G32B32A32_SFLOAT;
 constexpr VkFormat kDepthFormat = VK_FORMAT_D32_SFLOAT;
 
 template <class Map>
@@ -83,18 +82,19 @@ Result<void> RendererImpl::init(const RendererOptions& options) {
   auto ctx = VkContext::create(options);
   if (!ctx) return ctx.takeError();
   ctx_ = std::move(ctx.value());
+  profilePasses_ = options.profilePasses;
   hostResolve_ = options.resolve == ResolveMode::Host ||
                  (options.resolve == ResolveMode::Auto && ctx_->info().type == "cpu");
   BRDFA_TRY(createLayouts());
   BRDFA_TRY(createGbufferPipeline());
 
-  auto resolve = compileFixedKernel({}, {"lib/bindings.glsl", "lib/tonemap.glsl", "kernels/resolve.comp.glsl"},
+  auto resolve = compileFixedKernel({}, {"lib/bindings.glsl", "lib/gbuffer_encoding.glsl", "lib/tonemap.glsl", "kernels/resolve.comp.glsl"},
                                     {"GL_KHR_shader_subgroup_arithmetic"});
   if (!resolve) return resolve.takeError();
   resolve_ = std::move(resolve.value());
   for (bool constant : {true, false}) {
     auto bg = compileFixedKernel({constant ? "BRDFA_ENV_CONSTANT" : "BRDFA_ENV_CUBEMAP"},
-                                 {"lib/bindings.glsl", "lib/environment.glsl", "kernels/background.comp.glsl"});
+                                 {"lib/bindings.glsl", "lib/gbuffer_encoding.glsl", "lib/environment.glsl", "kernels/background.comp.glsl"});
     if (!bg) return bg.takeError();
     (constant ? backgroundConstant_ : backgroundCube_) = std::move(bg.value());
   }
@@ -178,12 +178,14 @@ Result<void> RendererImpl::createLayouts() {
   VkDevice d = ctx_->device();
   // Set 0: one view's G-buffer, accumulators, counters, environment and outputs
   // (bindings as in shaders/lib/bindings.glsl).
-  const std::array<std::pair<uint32_t, VkDescriptorType>, 8> viewBindings = {{
-      {0, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER},  {3, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER},
-      {4, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER},  {5, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER},
-      {6, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER},  {7, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER},
-      {8, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER},  {9, VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER}}};
-  std::array<VkDescriptorSetLayoutBinding, 8> view{};
+  const std::array<std::pair<uint32_t, VkDescriptorType>, 12> viewBindings = {{
+      {0, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER},         {3, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER},
+      {4, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER},         {5, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER},
+      {6, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER},         {7, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER},
+      {8, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER},         {9, VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER},
+      {10, VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER},  {11, VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER},
+      {12, VK_DESCRIPTOR_TYPE_STORAGE_TEXEL_BUFFER},  {13, VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER}}};
+  std::array<VkDescriptorSetLayoutBinding, viewBindings.size()> view{};
   for (size_t i = 0; i < view.size(); ++i)
     view[i] = {viewBindings[i].first, viewBindings[i].second, 1, VK_SHADER_STAGE_COMPUTE_BIT, nullptr};
   VkDescriptorSetLayoutCreateInfo li{VK_STRUCTURE_TYPE_DESCRIPTOR_SET_LAYOUT_CREATE_INFO};
@@ -219,26 +221,26 @@ Result<void> RendererImpl::createLayouts() {
   pli.pPushConstantRanges = &rasterPush;
   BRDFA_VK_TRY(vkCreatePipelineLayout(d, &pli, nullptr, &rasterLayout_));
 
-  // G-buffer render pass: three float targets + depth; the targets end ready to be copied into
-  // the G-buffer storage buffer the kernels read.
-  std::array<VkAttachmentDescription, 4> att{};
-  for (int i = 0; i < 4; ++i) {
-    att[i].format = i < 3 ? kGbufferFormat : kDepthFormat;
+  // G-buffer render pass: the surface and detail targets (lib/bindings.glsl) + depth; the
+  // targets end ready to be copied into the G-buffer buffer the kernels read.
+  std::array<VkAttachmentDescription, 3> att{};
+  for (int i = 0; i < 3; ++i) {
+    const bool color = i < 2;
+    att[i].format = i == 0 ? kGbufferSurfaceFormat : i == 1 ? kGbufferDetailFormat : kDepthFormat;
     att[i].samples = VK_SAMPLE_COUNT_1_BIT;
     att[i].loadOp = VK_ATTACHMENT_LOAD_OP_CLEAR;
-    att[i].storeOp = i < 3 ? VK_ATTACHMENT_STORE_OP_STORE : VK_ATTACHMENT_STORE_OP_DONT_CARE;
+    att[i].storeOp = color ? VK_ATTACHMENT_STORE_OP_STORE : VK_ATTACHMENT_STORE_OP_DONT_CARE;
     att[i].stencilLoadOp = VK_ATTACHMENT_LOAD_OP_DONT_CARE;
     att[i].stencilStoreOp = VK_ATTACHMENT_STORE_OP_DONT_CARE;
     att[i].initialLayout = VK_IMAGE_LAYOUT_UNDEFINED;
-    att[i].finalLayout = i < 3 ? VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL : VK_IMAGE_LAYOUT_DEPTH_STENCIL_ATTACHMENT_OPTIMAL;
+    att[i].finalLayout = color ? VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL : VK_IMAGE_LAYOUT_DEPTH_STENCIL_ATTACHMENT_OPTIMAL;
   }
-  VkAttachmentReference colors[3] = {{0, VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL},
-                                     {1, VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL},
-                                     {2, VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL}};
-  VkAttachmentReference depth{3, VK_IMAGE_LAYOUT_DEPTH_STENCIL_ATTACHMENT_OPTIMAL};
+  VkAttachmentReference colors[2] = {{0, VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL},
+                                     {1, VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL}};
+  VkAttachmentReference depth{2, VK_IMAGE_LAYOUT_DEPTH_STENCIL_ATTACHMENT_OPTIMAL};
   VkSubpassDescription sub{};
   sub.pipelineBindPoint = VK_PIPELINE_BIND_POINT_GRAPHICS;
-  sub.colorAttachmentCount = 3;
+  sub.colorAttachmentCount = 2;
   sub.pColorAttachments = colors;
   sub.pDepthStencilAttachment = &depth;
   std::array<VkSubpassDependency, 2> deps{};
@@ -265,7 +267,7 @@ Result<void> RendererImpl::createGbufferPipeline() {
   VkDevice d = ctx_->device();
   auto vs = spirv(ShaderStage::Vertex, sources_.assembleFixed({}, {"kernels/gbuffer.vert.glsl"}), nullptr);
   if (!vs) return vs.takeError();
-  auto fs = spirv(ShaderStage::Fragment, sources_.assembleFixed({}, {"kernels/gbuffer.frag.glsl"}), nullptr);
+  auto fs = spirv(ShaderStage::Fragment, sources_.assembleFixed({}, {"lib/gbuffer_encoding.glsl", "kernels/gbuffer.frag.glsl"}), nullptr);
   if (!fs) return fs.takeError();
   VkShaderModule modules[2] = {};
   const std::vector<uint32_t>* code[2] = {&(*vs)->words, &(*fs)->words};
@@ -315,10 +317,10 @@ Result<void> RendererImpl::createGbufferPipeline() {
   ds.depthTestEnable = VK_TRUE;
   ds.depthWriteEnable = VK_TRUE;
   ds.depthCompareOp = VK_COMPARE_OP_LESS;
-  VkPipelineColorBlendAttachmentState blend[3] = {};
+  VkPipelineColorBlendAttachmentState blend[2] = {};
   for (auto& b : blend) b.colorWriteMask = 0xF;
   VkPipelineColorBlendStateCreateInfo cb{VK_STRUCTURE_TYPE_PIPELINE_COLOR_BLEND_STATE_CREATE_INFO};
-  cb.attachmentCount = 3;
+  cb.attachmentCount = 2;
   cb.pAttachments = blend;
   VkDynamicState dyn[2] = {VK_DYNAMIC_STATE_VIEWPORT, VK_DYNAMIC_STATE_SCISSOR};
   VkPipelineDynamicStateCreateInfo dy{VK_STRUCTURE_TYPE_PIPELINE_DYNAMIC_STATE_CREATE_INFO};
@@ -494,9 +496,10 @@ AssembledProgram RendererImpl::assembleShadeProgram(const BrdfDefinition& brdf, 
   const BrdfFeatures features = detectFeatures(used);
   if (features.tangentFrame) spec.defines.push_back("BRDFA_TANGENT_FRAME");
   if (features.textures) spec.defines.push_back("BRDFA_TEXTURES");
+  if (features.texCoord) spec.defines.push_back("BRDFA_TEXCOORD");
   spec.userChunks.push_back(sources_.get("lib/brdf_inputs.glsl"));
   if (brdf.format == BrdfFormat::Legacy) spec.userChunks.push_back(sources_.get("lib/legacy_inputs.glsl"));
-  for (const char* piece : {"lib/bindings.glsl", "lib/random.glsl", "lib/frame.glsl", "lib/sampling.glsl",
+  for (const char* piece : {"lib/bindings.glsl", "lib/gbuffer_encoding.glsl", "lib/random.glsl", "lib/frame.glsl", "lib/sampling.glsl",
                             "lib/environment.glsl", "lib/environment_sampling.glsl"})
     spec.commonChunks.push_back(sources_.get(piece));
   spec.integrator = sources_.get("kernels/shade.comp.glsl");

@@ -25,6 +25,13 @@
 
 namespace brdfa {
 
+// The G-buffer's two planes (shaders/lib/bindings.glsl): surface = object id and normal,
+// detail = tangent and texCoord; bytes per pixel below.
+constexpr VkFormat kGbufferSurfaceFormat = VK_FORMAT_R32G32_UINT;
+constexpr VkFormat kGbufferDetailFormat = VK_FORMAT_R32G32B32A32_UINT;
+constexpr VkDeviceSize kGbufferSurfaceBytes = 8, kGbufferDetailBytes = 16;
+constexpr uint32_t kLeftHandedBit = 0x80000000u;  // in a surface texel's id (BRDFA_LEFT_HANDED)
+
 // What the shade kernel runs for a BRDF, a sampling mode and an environment kind.
 struct ShadeVariant {
   const char* define = "BRDFA_SAMPLING_COSINE";  // the integrator's strategy (kernels/shade.comp.glsl)
@@ -86,6 +93,7 @@ class RendererImpl final : public Renderer, public std::enable_shared_from_this<
   // every slot of a bound set must hold a valid image (see brdf_check.cpp).
   void writeDefaultTextures(VkDescriptorSet objectSet) const;
   bool hostResolve() const { return hostResolve_; }
+  bool profilePasses() const { return profilePasses_; }  // RendererOptions::profilePasses
 
   Result<std::shared_ptr<const GpuEnvironment>> environment(const std::string& name);
   Result<std::shared_ptr<const GpuMesh>> mesh(const std::string& name);
@@ -151,6 +159,7 @@ class RendererImpl final : public Renderer, public std::enable_shared_from_this<
   VkSampler textureSampler_ = VK_NULL_HANDLE;  // iTexture0..3: linear, repeating
   Image whiteTexture_;                          // 1x1 RGBA8 (1, 1, 1, 1): an unbound texture slot
   std::unique_ptr<ComputeKernel> resolve_, backgroundConstant_, backgroundCube_;
+  bool profilePasses_ = false;
   bool hostResolve_ = false;
 
   std::mutex spirvMutex_;
