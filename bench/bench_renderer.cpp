@@ -59,7 +59,7 @@ int passBreakdown(const std::string& sourceDir, int rounds, RenderView& plain) {
       if (!(*view)->renderPass()) return 1;
     views[v] = std::move(view.value());
   }
-  std::vector<double> setup, shade, edge, resolve, other, total, shadeOne, plainMs;
+  std::vector<double> setup, shade, edge, resolve, other, shadeOne, plainMs;
   for (int i = 0; i < 2 * rounds; ++i) {
     auto p = views[0]->renderPass();
     auto one = views[1]->renderPass();
@@ -71,7 +71,6 @@ int passBreakdown(const std::string& sourceDir, int rounds, RenderView& plain) {
     edge.push_back(b.edgeMs);
     resolve.push_back(b.resolveMs);
     other.push_back(b.otherMs);
-    total.push_back(p->lastPassMs);
     shadeOne.push_back(one->breakdown.shadeMs);
     plainMs.push_back(q->lastPassMs);
   }

@@ -17,8 +17,9 @@ void main() {
     // The per-pass use over a list of target.x edge pixels (brdfa_edgePixels), 64 per group,
     // covered in some slices only: a pixel no slice covers already holds the background
     // averaged over the first four passes' sub-pixel positions (one per slice, weighted by
-    // their sample counts), an estimate as good as more of the same would give. (A CPU device runs the kernel's code for every pixel
-    // dispatched, hit or not: over the bounds, ~10 ms a pass at 512^2.)
+    // their sample counts), an estimate as good as more of the same would give. (A CPU device
+    // runs the kernel's code for every pixel dispatched, hit or not: over the bounds, ~10 ms
+    // a pass at 512^2.)
     uint k = gl_WorkGroupID.x * 64u + gl_LocalInvocationIndex;
     if (k >= brdfa_pc.target.x) return;
     uint listed = texelFetch(brdfa_edgePixels, int(k)).x;

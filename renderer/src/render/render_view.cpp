@@ -742,13 +742,12 @@ Result<FrameStats> RenderViewImpl::renderPass() {
   // Where the sweep stands: samples done, visible object, workgroup row and column in its bounds.
   uint32_t done = visible.empty() ? count : 0, row = 0, col = 0;
   size_t obj = 0;
-  std::vector<double> bandUnits;
   double passDone = 0;  // units shaded so far
   // With RendererOptions::profilePasses each phase ends its submission, timed into `breakdown`.
   const bool profile = r_->profilePasses();
   PassBreakdown breakdown;
   VkCommandBuffer cb = VK_NULL_HANDLE;
-  auto endPhase = [&](double& phaseMs, uint32_t set) -> Result<void> {
+  auto endPhase = [&](double& phaseMs) -> Result<void> {
     if (!profile) return {};
     memoryBarrier(cb, VK_PIPELINE_STAGE_ALL_COMMANDS_BIT, VK_ACCESS_MEMORY_WRITE_BIT, VK_PIPELINE_STAGE_ALL_COMMANDS_BIT,
                   VK_ACCESS_MEMORY_READ_BIT | VK_ACCESS_MEMORY_WRITE_BIT);
@@ -757,8 +756,7 @@ Result<FrameStats> RenderViewImpl::renderPass() {
     phaseMs += ms;
     auto begun = cmd_.begin();
     if (!begun) return begun.takeError();
-    cb = *begun;
-    vkCmdBindDescriptorSets(cb, VK_PIPELINE_BIND_POINT_COMPUTE, r_->computeLayout(), 0, 1, &viewSets_[set], 0, nullptr);
+    cb = *begun;  // each phase's recording binds what it uses
     return {};
   };
   uint64_t submissions = 0;
@@ -774,7 +772,7 @@ Result<FrameStats> RenderViewImpl::renderPass() {
     cb = *begun;
     if (submissions == 0) {
       recordPending(cb, slice);
-      BRDFA_TRY(endPhase(breakdown.setupMs, slice));
+      BRDFA_TRY(endPhase(breakdown.setupMs));
     } else  // the accumulators are read-modify-written; earlier submissions' writes come first
       memoryBarrier(cb, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_ACCESS_SHADER_WRITE_BIT,
                     VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_ACCESS_SHADER_READ_BIT | VK_ACCESS_SHADER_WRITE_BIT);
@@ -797,14 +795,12 @@ Result<FrameStats> RenderViewImpl::renderPass() {
       // per submission).
       uint32_t cols = 0, rows = 0;
       double taken = 0;
-      bandUnits.clear();  // of each row taken
       if (col == 0) {
         for (uint32_t r = row; r < gy; ++r, ++rows) {
           double rowUnits = 0;
           for (uint32_t c = 0; c < gx; ++c) rowUnits += groupUnits(o, size_t(r) * gx + c, n);
           if (units + taken + rowUnits > budget) break;
           taken += rowUnits;
-          bandUnits.push_back(rowUnits);
         }
         if (rows > 0) cols = gx;
       }
@@ -862,18 +858,18 @@ Result<FrameStats> RenderViewImpl::renderPass() {
         memoryBarrier(cb, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_ACCESS_SHADER_WRITE_BIT,
                       VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_ACCESS_SHADER_READ_BIT | VK_ACCESS_SHADER_WRITE_BIT);
     }
-    BRDFA_TRY(endPhase(breakdown.shadeMs, slice));
+    BRDFA_TRY(endPhase(breakdown.shadeMs));
     if (done >= count) {
       // Inside the objects' bounds a pixel may be background in this slice and covered in
       // another (an edge): its background samples are taken with the pass, so the pixel is the
       // average over its sub-pixel positions. With one slice nothing changes from pass to pass.
       if (jitterCount_ > 1) recordBackground(cb, coverRect_, slice, count, firstPass);
-      BRDFA_TRY(endPhase(breakdown.edgeMs, 0));
+      BRDFA_TRY(endPhase(breakdown.edgeMs));
       if (refreshError && !r_->hostResolve()) {
         memoryBarrier(cb, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_ACCESS_SHADER_WRITE_BIT,
                       VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_ACCESS_SHADER_READ_BIT);
         recordResolve(cb, false);
-        BRDFA_TRY(endPhase(breakdown.resolveMs, 0));
+        BRDFA_TRY(endPhase(breakdown.resolveMs));
       }
     }
     memoryBarrier(cb, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_ACCESS_SHADER_WRITE_BIT,
