@@ -17,20 +17,6 @@ namespace brdfa::bench {
 
 namespace {
 
-Scene ggxScene(const std::string& sourceDir, bool visibleBackground, int samplesPerPass) {
-  auto def = parseBrdf(readText(sourceDir + "/shaders/brdfs/ggx.brdf"));
-  Scene s;
-  s.environment.name = "sky";
-  s.environment.visible = visibleBackground;
-  s.render.samplesPerFrame = samplesPerPass;
-  s.render.maxSamples = kMaxTotalSamples;
-  s.render.sampling = SamplingMode::Cosine;  // the reference kernel's estimator
-  SceneObject o;
-  o.brdf = std::make_shared<BrdfDefinition>(def.value());
-  s.objects.push_back(o);
-  return s;
-}
-
 double mean(const std::vector<double>& v) {
   double sum = 0;
   for (double x : v) sum += x;
@@ -93,6 +79,20 @@ int passBreakdown(const std::string& sourceDir, int rounds, RenderView& plain) {
 }
 
 }  // namespace
+
+Scene ggxScene(const std::string& sourceDir, bool visibleBackground, int samplesPerPass) {
+  auto def = parseBrdf(readText(sourceDir + "/shaders/brdfs/ggx.brdf"));
+  Scene s;
+  s.environment.name = "sky";
+  s.environment.visible = visibleBackground;
+  s.render.samplesPerFrame = samplesPerPass;
+  s.render.maxSamples = kMaxTotalSamples;
+  s.render.sampling = SamplingMode::Cosine;  // the reference kernel's estimator
+  SceneObject o;
+  o.brdf = std::make_shared<BrdfDefinition>(def.value());
+  s.objects.push_back(o);
+  return s;
+}
 
 int runRendererBench(const std::string& sourceDir, int rounds) {
   RendererOptions options;

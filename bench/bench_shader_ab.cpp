@@ -1,0 +1,71 @@
+// Shader trees against each other in one run: the same scenes in one renderer per tree,
+// their passes interleaved so both see the same machine load (this 2-core VM's load
+// changes a pass's time by 1.5x from one minute to the next; runs minutes apart cannot compare
+// a change of a few percent). For shader work: `brdfa-bench --only shaders --against DIR[,DIR...]`,
+// each DIR holding a modified copy of shaders/.
+#include "bench_shader_ab.h"
+
+#include <cstdio>
+#include <vector>
+
+#include "bench_renderer.h"
+#include "bench_util.h"
+#include "brdfa/renderer.h"
+
+namespace brdfa::bench {
+
+int runShaderAbBench(const std::string& sourceDir, const std::vector<std::string>& againstDirs, int rounds) {
+  constexpr int kSamples[2] = {1, 16};
+  struct Tree {
+    std::string dir;
+    std::shared_ptr<Renderer> renderer;
+    std::unique_ptr<RenderView> views[2];  // kSamples each pass
+    std::vector<double> ms[2];
+  };
+  std::vector<Tree> trees(1 + againstDirs.size());
+  trees[0].dir = sourceDir;
+  for (size_t i = 0; i < againstDirs.size(); ++i) trees[1 + i].dir = againstDirs[i];
+  for (Tree& t : trees) {
+    RendererOptions options;
+    options.shaderDir = t.dir + "/shaders";
+    options.submissionTargetMs = 0;  // whole passes: the kernels' cost, not the split's
+    auto renderer = Renderer::create(options);
+    if (!renderer) {
+      std::fprintf(stderr, "renderer for %s: %s\n", t.dir.c_str(), renderer.error().message.c_str());
+      return 1;
+    }
+    t.renderer = renderer.value();
+    for (int v = 0; v < 2; ++v) {
+      auto view = t.renderer->createView();
+      if (!view) return 1;
+      if (auto set = (*view)->setScene(ggxScene(sourceDir, false, kSamples[v])); !set) {
+        std::fprintf(stderr, "%s: %s\n", t.dir.c_str(), set.error().message.c_str());
+        return 1;
+      }
+      for (int i = 0; i < 6; ++i)  // JIT, raster, the ramp of the first passes
+        if (!(*view)->renderPass()) return 1;
+      t.views[v] = std::move(view.value());
+    }
+  }
+  for (int i = 0; i < 2 * rounds; ++i)
+    for (int v = 0; v < 2; ++v)
+      for (Tree& t : trees) {
+        auto pass = t.views[v]->renderPass();
+        if (!pass) return 1;
+        t.ms[v].push_back(pass->lastPassMs);
+      }
+  header("Shader trees against A = " + sourceDir + ": GGX sphere, cosine, 512x512, median of " +
+         std::to_string(2 * rounds) + " interleaved passes");
+  for (int v = 0; v < 2; ++v) {
+    const std::string what = ", " + std::to_string(kSamples[v]) + " sample(s)/pass";
+    const double a = median(trees[0].ms[v]);
+    row("A" + what, a, "ms");
+    for (size_t i = 1; i < trees.size(); ++i) {
+      const double b = median(trees[i].ms[v]);
+      row(trees[i].dir + what, b, "ms", "/ A " + std::to_string(b / a).substr(0, 5));
+    }
+  }
+  return 0;
+}
+
+}  // namespace brdfa::bench
