@@ -248,6 +248,9 @@ class Worker {
       auto v = view(head);
       if (!v) return noView();
       reply(id, map(v->renderPass(), [](auto& s) { return wire::toJson(s); }));
+    } else if (op == "interruptPass") {
+      if (auto v = view(head)) v->interruptPass();
+      reply(id, json());
     } else if (op == "stats") {
       auto v = view(head);
       if (!v) return noView();

@@ -93,7 +93,9 @@ Result<void> Session::applyScene(std::unique_lock<std::mutex>& updateLock, const
   if (!updateLock.owns_lock() || updateLock.mutex() != &sceneUpdateMutex_)
     return makeError(ErrorCode::Internal, "applyScene called without the scene update lock");
   // Called outside mutex_: setScene may compile for a while and must not stall stats or
-  // streams. The view serializes it against the render thread's passes.
+  // streams. The view serializes it against the render thread's passes; the pass in progress
+  // is asked to stop at its next submission, so the change waits for that, not the whole pass.
+  view_->interruptPass();
   Result<void> applied = withViewPriority([&] { return view_->setScene(scene); });
   if (!applied) return applied;
   initializer_ = nullptr;  // an explicit scene supersedes a pending default

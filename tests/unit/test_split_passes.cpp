@@ -117,6 +117,97 @@ TEST(SplitPasses, SplitRenderEqualsUnsplitRender) {
   }
 }
 
+// Issue 15: a scene change interrupts the pass in progress at its next submission
+// (RenderView::interruptPass). An interrupted pass counts no samples; the next renderPass()
+// completes it with the same samples, so a view interrupted in every pass renders the
+// uninterrupted image (to float rounding: the sweeps are cut elsewhere).
+TEST(SplitPasses, InterruptedPassesCompleteToTheSameImage) {
+  auto renderer = makeRenderer(0.05);
+  ASSERT_TRUE(renderer);
+  const Scene scene = twoObjectScene();
+  const Frame reference = render(*renderer, scene);
+  ASSERT_EQ(reference.rgba32f.size(), size_t(72 * 64 * 4));
+
+  auto view = renderer->createView();
+  ASSERT_TRUE(view.ok());
+  ASSERT_TRUE(view.value()->setScene(scene).ok());
+  uint64_t interrupted = 0;
+  for (int guard = 0; guard < 10000; ++guard) {
+    const FrameStats before = view.value()->stats();
+    view.value()->interruptPass();  // taken by the next pass, after its first submission
+    auto pass = view.value()->renderPass();
+    ASSERT_TRUE(pass.ok()) << pass.error().message;
+    if (pass->spp == before.spp) {
+      ++interrupted;
+      EXPECT_EQ(pass->passes, before.passes) << "an interrupted pass counted";
+      continue;
+    }
+    if (pass->done()) break;
+  }
+  EXPECT_GE(interrupted, reference.stats.passes - 1) << "passes of more than one submission were not interrupted";
+  auto frame = view.value()->readFrame(true);
+  ASSERT_TRUE(frame.ok());
+  EXPECT_EQ(frame->stats.spp, reference.stats.spp);
+  EXPECT_EQ(frame->stats.passes, reference.stats.passes);
+  EXPECT_EQ(frame->stats.nanSamples, reference.stats.nanSamples);
+  for (size_t i = 0; i < frame->rgba32f.size(); ++i)
+    ASSERT_NEAR(frame->rgba32f[i], reference.rgba32f[i], 1e-5f * std::max(1.0f, std::abs(reference.rgba32f[i])))
+        << "value " << i << " (pixel " << i / 4 << ")";
+
+  // A frame read while a pass is interrupted completes that pass first: its first pass after a
+  // restart leaves no pixel of the old image (here the previous BRDF's), and the count is exact.
+  Scene other = scene;
+  other.objects[0].brdf = builtin("lambert");
+  auto afterSwitch = [&](bool interrupt) -> Frame {
+    auto v = renderer->createView();
+    EXPECT_TRUE(v.ok());
+    if (!v.ok() || !v.value()->setScene(scene).ok()) return {};
+    for (int guard = 0; guard < 10000; ++guard) {
+      auto pass = v.value()->renderPass();
+      if (!pass.ok() || pass->done()) break;
+    }
+    if (!v.value()->setScene(other).ok()) return {};
+    if (interrupt) {
+      v.value()->interruptPass();
+      auto cut = v.value()->renderPass();
+      EXPECT_TRUE(cut.ok());
+      EXPECT_EQ(cut.ok() ? cut->spp : 99, 0u) << "the first pass was not interrupted";
+    } else {
+      EXPECT_TRUE(v.value()->renderPass().ok());
+    }
+    auto read = v.value()->readFrame(true);
+    EXPECT_TRUE(read.ok());
+    return read.ok() ? read.value() : Frame{};
+  };
+  const Frame switched = afterSwitch(false), interruptedSwitch = afterSwitch(true);
+  ASSERT_EQ(interruptedSwitch.rgba32f.size(), switched.rgba32f.size());
+  EXPECT_EQ(interruptedSwitch.stats.spp, 1u);
+  EXPECT_EQ(switched.stats.spp, 1u);
+  for (size_t i = 0; i < switched.rgba32f.size(); ++i)
+    ASSERT_NEAR(interruptedSwitch.rgba32f[i], switched.rgba32f[i], 1e-5f * std::max(1.0f, std::abs(switched.rgba32f[i])))
+        << "value " << i << " (pixel " << i / 4 << ")";
+
+  // A restart drops an interrupted pass: the new scene's image is a fresh view's.
+  ASSERT_TRUE(view.value()->setScene(other).ok());
+  ASSERT_TRUE(view.value()->renderPass().ok());
+  view.value()->interruptPass();
+  auto cutAgain = view.value()->renderPass();
+  ASSERT_TRUE(cutAgain.ok());
+  ASSERT_EQ(cutAgain->spp, 1u);
+  ASSERT_TRUE(view.value()->setScene(scene).ok());
+  for (int guard = 0; guard < 10000; ++guard) {
+    auto pass = view.value()->renderPass();
+    ASSERT_TRUE(pass.ok());
+    if (pass->done()) break;
+  }
+  auto again = view.value()->readFrame(true);
+  ASSERT_TRUE(again.ok());
+  EXPECT_EQ(again->stats.spp, reference.stats.spp);
+  for (size_t i = 0; i < again->rgba32f.size(); ++i)
+    ASSERT_NEAR(again->rgba32f[i], reference.rgba32f[i], 1e-5f * std::max(1.0f, std::abs(reference.rgba32f[i])))
+        << "value " << i << " (pixel " << i / 4 << ")";
+}
+
 Scene furnaceScene(std::shared_ptr<const BrdfDefinition> brdf, int size, int samplesPerFrame, int spp) {
   Scene s;
   s.environment.name = "furnace";

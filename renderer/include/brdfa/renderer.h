@@ -164,8 +164,18 @@ class RenderView {
 
   virtual FrameStats stats() const = 0;
 
-  // Resolves the accumulators into an image; `linear` also returns float radiance.
+  // Resolves the accumulators into an image; `linear` also returns float radiance. A pass left
+  // incomplete by interruptPass() is completed first.
   virtual Result<Frame> readFrame(bool linear) = 0;
+
+  // Asks the pass in progress, or else the next one, to stop at its next queue-submission
+  // boundary and return (its samples not yet counted in spp), so that a setScene() waiting for
+  // the view gets it after one submission instead of a whole pass. The next renderPass() or
+  // readFrame() completes the interrupted pass with the same samples, unless a setScene() that
+  // restarts accumulation drops it. setScene() withdraws a request no pass has taken yet.
+  // Never blocks. The first passes after a restart are split into short submissions (about
+  // 12 ms on lavapipe) so that this takes effect promptly while a user is changing the scene.
+  virtual void interruptPass() {}
 };
 
 // What the renderer's memory holds now, by use, against its budget (RendererOptions).

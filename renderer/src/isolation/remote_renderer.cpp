@@ -127,6 +127,7 @@ class RemoteView : public RenderView {
     return stats_;
   }
   Result<Frame> readFrame(bool linear) override;
+  void interruptPass() override;
 
  private:
   // Makes the view exist in the current worker, with its last scene (issue 12's restore).
@@ -750,6 +751,14 @@ Result<FrameStats> RemoteView::renderPass() {
   stats_ = wire::statsFromJson(m->head.at("value"));
   r_->noteProven(Budget::Pass, programs_.keys);
   return stats_;
+}
+
+void RemoteView::interruptPass() {
+  // Not under mutex_, which the pass to interrupt holds; the worker serves it on another
+  // thread. A view not in the current worker (being restored) has no pass to interrupt.
+  Call c;
+  c.head = json{{"op", "interruptPass"}, {"view", id_}};
+  (void)r_->request(std::move(c));
 }
 
 Result<Frame> RemoteView::readFrame(bool linear) {

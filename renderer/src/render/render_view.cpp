@@ -30,6 +30,20 @@ constexpr double kProbeUnits = 2048;
 constexpr double kGrowth = 4;
 constexpr double kCostDecay = 0.75;
 constexpr double kTail = 1.25;     // a pass's last submission may take this many budgets
+// The cost of a dispatched pixel apart from its samples, in cost units (pixel-samples). A CPU
+// device runs the kernel's straight-line code (G-buffer, frame, accumulators) for every pixel
+// of a dispatch, covered or not, even past an early return: measured on lavapipe (GGX, cosine,
+// 512x512) that part cost as much as 5-7 samples of a covered pixel (bench --only renderer).
+// Without it a cost learned at 16 samples/pass read 1-sample passes 5x too cheap.
+constexpr double kDispatchUnitsPerPixel = 4;
+// The passes right after the first one of a restart (2 and 4 samples) are what the next change
+// of a user moving a slider or the camera meets: their submissions aim at no more than this,
+// so that interruptPass() takes effect within about that long. The first pass, whose frame
+// the user waits for, and later ones use the device's target: every submission of a dispatch
+// split more finely waits for the slowest of the CPU device's threads (a 1-sample pass of the
+// GGX sphere took 50 ms in 5 submissions against 35 ms in one).
+constexpr uint64_t kInteractivePasses = 3;
+constexpr double kInteractiveSubmissionMs = 12;
 
 uint32_t groups(uint32_t n, uint32_t size) { return (n + size - 1) / size; }
 
@@ -343,9 +357,12 @@ Result<std::vector<RenderViewImpl::ObjectState>> RenderViewImpl::buildObjects(co
   return out;
 }
 
+void RenderViewImpl::interruptPass() { interruptRequested_ = true; }
+
 Result<void> RenderViewImpl::setScene(const Scene& scene) {
   BRDFA_TRY(checkScene(scene));
   std::lock_guard<std::mutex> lock(mutex_);
+  interruptRequested_ = false;  // served: this call has the view now
   const uint64_t dropsBefore = r_->memoryUsage().drops;
   auto env = r_->environment(scene.environment.name);
   if (!env) {
@@ -435,6 +452,7 @@ Result<void> RenderViewImpl::setScene(const Scene& scene) {
     }
   }
   if (restart) {
+    partial_.reset();  // its samples are of the old image
     const uint64_t version = stats_.sceneVersion;
     stats_ = FrameStats{};
     stats_.sceneVersion = version;
@@ -578,12 +596,12 @@ void RenderViewImpl::recordBackground(VkCommandBuffer cb, const PixelRect& rect,
     vkCmdDispatch(cb, groups(rect.width, kShadeGroup), groups(rect.height, kShadeGroup), 1);
 }
 
-void RenderViewImpl::recordPending(VkCommandBuffer cb, uint32_t slice) {
+void RenderViewImpl::recordPending(VkCommandBuffer cb, uint32_t slice, bool resuming) {
   // Slice 0 carries the coverage the resolve and the once-per-restart background use.
   const bool raster = (slicesReady_ & 1u) == 0 || (slicesReady_ & (1u << slice)) == 0;
   if ((slicesReady_ & 1u) == 0) recordRaster(cb, 0);
   if ((slicesReady_ & (1u << slice)) == 0) recordRaster(cb, slice);
-  const bool firstPass = stats_.passes == 0;
+  const bool firstPass = stats_.passes == 0 && !resuming;  // a resumed first pass keeps its NaN count
   if (clearPending_) vkCmdFillBuffer(cb, accum_.handle(), 0, VK_WHOLE_SIZE, 0);
   if (firstPass) vkCmdFillBuffer(cb, counters_.handle(), 0, VK_WHOLE_SIZE, 0);
   if (raster || clearPending_ || firstPass)
@@ -694,35 +712,52 @@ void RenderViewImpl::listEdgePixels() {
 Result<FrameStats> RenderViewImpl::renderPass() {
   std::lock_guard<std::mutex> lock(mutex_);
   if (!hasScene_) return makeError(ErrorCode::InvalidArgument, "no scene has been set");
+  return passLocked(true);
+}
+
+Result<FrameStats> RenderViewImpl::passLocked(bool interruptible) {
   const uint64_t maxSamples = static_cast<uint64_t>(scene_.render.maxSamples);
   updateDone();
-  if (stats_.done()) return stats_;
+  if (stats_.done()) {
+    // max_samples lowered below an interrupted pass: its samples stay where they were taken
+    // (each pixel's mean divides by its own count), the rest of it is not needed.
+    partial_.reset();
+    return stats_;
+  }
   const auto t0 = std::chrono::steady_clock::now();
+  const std::optional<PartialPass> resumed = std::move(partial_);
+  partial_.reset();
   // Between passes only, so that how a pass is split into submissions never changes the image.
-  if (!edgeListKnown_) listEdgePixels();
+  if (!resumed && !edgeListKnown_) listEdgePixels();
   // Passes after a restart ramp up 1, 2, 4, ... samples to samples_per_frame, so the first
   // frame of a change arrives quickly.
   const uint64_t ramp = stats_.passes < 20 ? (uint64_t(1) << stats_.passes) : UINT64_MAX;
-  const uint32_t count = static_cast<uint32_t>(std::min<uint64_t>(
-      {static_cast<uint64_t>(scene_.render.samplesPerFrame), ramp, maxSamples - stats_.spp}));
-  const uint32_t slice = sliceForPass(stats_.passes);
+  const uint32_t count = resumed ? resumed->count
+                                 : static_cast<uint32_t>(std::min<uint64_t>(
+                                       {static_cast<uint64_t>(scene_.render.samplesPerFrame), ramp, maxSamples - stats_.spp}));
+  const uint32_t slice = resumed ? resumed->slice : sliceForPass(stats_.passes);
   const bool firstPass = stats_.passes == 0;
   // Refresh the error estimate in the last submission when it is due (and a second half exists).
-  const bool refreshError = stats_.passes >= 1 &&
-                            (sinceErrorMs_ >= kErrorRefreshMs || stats_.spp + count >= maxSamples);
+  const bool refreshError = resumed ? resumed->refreshError
+                                    : stats_.passes >= 1 &&
+                                          (sinceErrorMs_ >= kErrorRefreshMs || stats_.spp + count >= maxSamples);
 
   // Cost in units: one per sample of a covered pixel. An invocation off the object costs next
   // to nothing against a loop-heavy BRDF's sample, the case the split is for; one unit per
   // workgroup keeps empty tiles from being free.
   const double groupPixels = kShadeGroup * kShadeGroup;
   auto groupUnits = [&](const ObjectState& o, size_t group, uint32_t n) {
-    return (o.cover.empty() ? groupPixels : o.cover[group]) * n + 1.0;
+    return (o.cover.empty() ? groupPixels : o.cover[group]) * n + groupPixels * kDispatchUnitsPerPixel;
   };
-  const double targetMs = r_->ctx().submissionTargetMs(cmd_.fence());
+  double targetMs = r_->ctx().submissionTargetMs(cmd_.fence());
+  if (targetMs > 0 && stats_.passes >= 1 && stats_.passes < kInteractivePasses)
+    targetMs = std::min(targetMs, kInteractiveSubmissionMs);
   uint32_t chunk = count;  // samples per sweep
-  if (targetMs > 0 && msPerUnit_ > 0)
-    chunk = static_cast<uint32_t>(
-        std::clamp(std::floor(targetMs / msPerUnit_ / groupPixels), 1.0, double(count)));
+  if (resumed)  // a sweep in progress goes on with the same samples
+    chunk = resumed->chunk;
+  else if (targetMs > 0 && msPerUnit_ > 0)
+    chunk = static_cast<uint32_t>(std::clamp(
+        std::floor(targetMs / msPerUnit_ / groupPixels - kDispatchUnitsPerPixel), 1.0, double(count)));
   std::vector<size_t> visible;  // objects on screen
   double passUnits = 0;         // to let the last submission take up to kTail budgets
   for (size_t i = 0; i < objects_.size(); ++i) {
@@ -743,6 +778,10 @@ Result<FrameStats> RenderViewImpl::renderPass() {
   uint32_t done = visible.empty() ? count : 0, row = 0, col = 0;
   size_t obj = 0;
   double passDone = 0;  // units shaded so far
+  if (resumed) {  // the same scene geometry (a restart drops the partial pass): same objects
+    done = resumed->done, row = resumed->row, col = resumed->col, obj = resumed->obj;
+    passDone = resumed->passDone;
+  }
   // With RendererOptions::profilePasses each phase ends its submission, timed into `breakdown`.
   const bool profile = r_->profilePasses();
   PassBreakdown breakdown;
@@ -771,7 +810,7 @@ Result<FrameStats> RenderViewImpl::renderPass() {
     if (!begun) return begun.takeError();
     cb = *begun;
     if (submissions == 0) {
-      recordPending(cb, slice);
+      recordPending(cb, slice, resumed.has_value());
       BRDFA_TRY(endPhase(breakdown.setupMs));
     } else  // the accumulators are read-modify-written; earlier submissions' writes come first
       memoryBarrier(cb, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_ACCESS_SHADER_WRITE_BIT,
@@ -891,22 +930,38 @@ Result<FrameStats> RenderViewImpl::renderPass() {
     // measures. Learned from it, the cost read ~1000x too high, and the view went on in
     // one-workgroup submissions, each waiting its turn behind every other view's (one of 30
     // sessions streaming stalled for a minute).
-    if (units > 0 && warmUp_)
+    // A probe's reading is an upper bound only: its few units carry a whole submission's
+    // fixed costs (wake-ups, fence), so it reads several times too high, and falling from it
+    // by kCostDecay cost a slider's first pass a dozen submissions. The reading after it is
+    // taken as it is.
+    if (units > 0 && warmUp_) {
       warmUp_ = false;
-    else if (units > 0 && (msPerUnit_ <= 0 || units >= 0.5 * sized || ms > targetMs))
-      msPerUnit_ = std::max(ms / units, kCostDecay * msPerUnit_);
+    } else if (units > 0 && (msPerUnit_ <= 0 || units >= 0.5 * sized || ms > targetMs)) {
+      msPerUnit_ = probed_ || msPerUnit_ <= 0 ? ms / units : std::max(ms / units, kCostDecay * msPerUnit_);
+      probed_ = units <= kProbeUnits && !probed_;
+    }
     maxUnits_ = std::max(maxUnits_, units);
+    if (done < count && interruptible && interruptRequested_.exchange(false)) {
+      // Interrupted (a scene change waits): keep the place; spp counts the pass once complete.
+      const double ms = msSince(t0);
+      partial_ = PartialPass{count, slice, chunk, done, row, col, obj, passDone,
+                             (resumed ? resumed->ms : 0.0) + ms, refreshError};
+      stats_.elapsedMs += ms;
+      sinceErrorMs_ += ms;
+      return stats_;
+    }
   } while (done < count);
 
-  const double passMs = msSince(t0);
+  const double segmentMs = msSince(t0);  // this call's part of the pass
+  const double passMs = segmentMs + (resumed ? resumed->ms : 0.0);
   stats_.spp += count;
   stats_.passes += 1;
-  stats_.elapsedMs += passMs;
+  stats_.elapsedMs += segmentMs;
   stats_.lastPassMs = passMs;
   stats_.submissions = submissions;
   stats_.maxSubmissionMs = maxSubmissionMs;
   stats_.nanSamples = *static_cast<const uint32_t*>(counters_.mapped());
-  sinceErrorMs_ += passMs;
+  sinceErrorMs_ += segmentMs;
   if (refreshError) {
     const auto tResolve = std::chrono::steady_clock::now();
     setRelError(r_->hostResolve() ? resolveOnHost(hostResolveInput(), nullptr, nullptr) : deviceErrorSums());
@@ -914,7 +969,7 @@ Result<FrameStats> RenderViewImpl::renderPass() {
   }
   updateDone();
   if (profile) {
-    const double total = msSince(t0);
+    const double total = msSince(t0) + (resumed ? resumed->ms : 0.0);
     breakdown.otherMs = total - breakdown.setupMs - breakdown.shadeMs - breakdown.edgeMs - breakdown.resolveMs;
     stats_.lastPassMs = total;
   }
@@ -930,6 +985,9 @@ FrameStats RenderViewImpl::stats() const {
 Result<Frame> RenderViewImpl::readFrame(bool linear) {
   std::lock_guard<std::mutex> lock(mutex_);
   if (!hasScene_) return makeError(ErrorCode::InvalidArgument, "no scene has been set");
+  // An interrupted pass is completed first: in its first pass after a restart, the pixels it
+  // has not reached yet still hold the previous image.
+  if (partial_) BRDFA_TRY(passLocked(false));
   const bool host = r_->hostResolve();
   // Before the first pass of a restart the accumulators may still hold the previous scene's
   // object pixels (a parameter change does not clear them): clear now.

@@ -1,8 +1,10 @@
 // One progressive render target: G-buffer, half accumulators, outputs, per-object state.
 #pragma once
 
+#include <atomic>
 #include <memory>
 #include <mutex>
+#include <optional>
 #include <vector>
 
 #include "brdfa/renderer.h"
@@ -24,6 +26,7 @@ class RenderViewImpl final : public RenderView {
   Result<FrameStats> renderPass() override;
   FrameStats stats() const override;
   Result<Frame> readFrame(bool linear) override;
+  void interruptPass() override;
 
  private:
   struct ObjectState {
@@ -40,13 +43,16 @@ class RenderViewImpl final : public RenderView {
     std::vector<uint32_t> cover;
   };
 
+  // The pass of renderPass, under mutex_; an `interruptible` one ends early on interruptPass().
+  Result<FrameStats> passLocked(bool interruptible);
   Result<void> resize(uint32_t width, uint32_t height);
   void writeViewDescriptors();
   Result<std::vector<ObjectState>> buildObjects(const Scene& scene);
   void releaseObjects(std::vector<ObjectState>& objects);
   // Records what a scene change left pending: the raster pass of G-buffer slice 0 and of
   // `slice` into their G-buffer planes; clearing the accumulators and writing the background.
-  void recordPending(VkCommandBuffer cb, uint32_t slice);
+  // `resuming`: the first submission of an interrupted pass's remainder.
+  void recordPending(VkCommandBuffer cb, uint32_t slice, bool resuming = false);
   void recordRaster(VkCommandBuffer cb, uint32_t slice);
   // The background where no object can be (outside every object's screen bounds) is written
   // once per restart; inside those bounds it is sampled each pass with that pass's jitter.
@@ -109,9 +115,22 @@ class RenderViewImpl final : public RenderView {
   double msPerUnit_ = 0;
   double maxUnits_ = 0;
   bool warmUp_ = true;  // the next shading submission is a warm-up (see renderPass)
+  bool probed_ = false;  // msPerUnit_ was read from a probe (see renderPass)
   bool coverageKnown_ = false;  // ObjectState::cover is measured for the current geometry
   double sinceErrorMs_ = 0;  // pass time since rel_error was last refreshed
   FrameStats stats_;
+  // A pass interrupted between two submissions (interruptPass): where its sweep stood, so the
+  // next pass completes it with the same samples. A restart drops it.
+  struct PartialPass {
+    uint32_t count = 0, slice = 0, chunk = 0;  // the pass's samples, G-buffer slice, samples per sweep
+    uint32_t done = 0, row = 0, col = 0;       // samples swept, workgroup row and column in the object
+    size_t obj = 0;                             // index into the visible objects
+    double passDone = 0;                        // cost units shaded so far
+    double ms = 0;                              // wall time spent on it so far
+    bool refreshError = false;
+  };
+  std::optional<PartialPass> partial_;
+  std::atomic<bool> interruptRequested_{false};
 };
 
 }  // namespace brdfa
