@@ -5,6 +5,9 @@
 #include "bench_http.h"
 
 #include <algorithm>
+#include <atomic>
+#include <condition_variable>
+#include <mutex>
 #include <chrono>
 #include <cstdlib>
 #include <fstream>
@@ -14,6 +17,7 @@
 
 #include "bench_util.h"
 #include "bench_nonce.h"
+#include "brdfa/image_codec.h"
 #include "server_process.h"
 
 namespace brdfa::bench {
@@ -26,9 +30,71 @@ bool ok(const httplib::Result& r, int status = 200) { return r && r->status == s
 
 struct ServiceFigures {
   double editMs = 0, sliderMs = 0, fps = 0;
+  double editFullMs = 0, sliderFullMs = 0, orbitFps = 0;
 };
 
-// The three figures a web UI user waits for, through a server started with `extraArgs`.
+// Watches a session's stream on a connection of its own, as the web UI does: when each part
+// arrived, and the scene_version and samples per pixel in its PNG's tEXt chunks.
+class StreamWatcher {
+ public:
+  StreamWatcher(testsupport::ServerProcess& server, const std::string& path) : cli_(server.client(30)) {
+    thread_ = std::thread([this, path] {
+      std::string carry;
+      cli_->Get(path, [&](const char* data, size_t len) {
+        carry.append(data, len);
+        static const std::string kSignature("\x89PNG\r\n\x1a\n", 8), kEnd = "\r\n--frame\r\n";
+        for (;;) {
+          const size_t begin = carry.find(kSignature);
+          const size_t end = begin == std::string::npos ? begin : carry.find(kEnd, begin);
+          if (end == std::string::npos) break;
+          const std::vector<uint8_t> png(carry.begin() + begin, carry.begin() + end);
+          Part part{Clock::now(), std::strtoull(pngText(png, "brdfa:scene_version").c_str(), nullptr, 10),
+                    std::strtoull(pngText(png, "brdfa:spp").c_str(), nullptr, 10)};
+          carry.erase(0, end + 2);
+          std::lock_guard lock(mutex_);
+          parts_.push_back(part);
+          arrived_.notify_all();
+        }
+        return !stop_;
+      });
+    });
+  }
+  ~StreamWatcher() {
+    stop_ = true;
+    thread_.join();  // the next part (or the server's keep-alive) ends the read
+  }
+  // Milliseconds from t0 to the first part showing scene_version >= version; -1 past timeoutMs.
+  double waitForVersion(uint64_t version, Clock::time_point t0, double timeoutMs) {
+    std::unique_lock lock(mutex_);
+    const Part* found = nullptr;
+    arrived_.wait_for(lock, std::chrono::duration<double, std::milli>(timeoutMs), [&] {
+      for (const Part& p : parts_)
+        if (p.version >= version && p.at >= t0) return (found = &p) != nullptr;
+      return false;
+    });
+    return found ? std::chrono::duration<double, std::milli>(found->at - t0).count() : -1;
+  }
+  size_t partsSince(Clock::time_point t) {
+    std::lock_guard lock(mutex_);
+    return size_t(std::count_if(parts_.begin(), parts_.end(), [&](const Part& p) { return p.at >= t; }));
+  }
+
+ private:
+  struct Part {
+    Clock::time_point at;
+    uint64_t version = 0, spp = 0;
+  };
+  std::unique_ptr<httplib::Client> cli_;
+  std::atomic<bool> stop_{false};
+  std::mutex mutex_;
+  std::condition_variable arrived_;
+  std::vector<Part> parts_;
+  std::thread thread_;
+};
+
+// The figures a web UI user waits for, through a server started with `extraArgs`: a change's
+// first frame on the stream (what the UI shows: a preview, RenderSettings::previewPass) and its
+// first full 1-sample frame (GET /frame?min_spp=1), both timed from the request that made it.
 bool measureService(const std::string& serverBinary, const std::string& sourceDir,
                     const std::vector<std::string>& extraArgs, ServiceFigures& out) {
   testsupport::ServerProcess server;
@@ -47,11 +113,24 @@ bool measureService(const std::string& serverBinary, const std::string& sourceDi
     std::fprintf(stderr, "could not set up the default session\n");
     return false;
   }
+  StreamWatcher stream(server, "/api/sessions/default/stream");
+  auto sceneVersion = [&]() -> uint64_t {
+    auto r = cli->Get("/api/sessions/default/stats");
+    return ok(r) ? nlohmann::json::parse(r->body).value("scene_version", uint64_t(0)) : 0;
+  };
+  // After a change made at t0: its first stream frame, then its first full frame.
+  auto timeChange = [&](Clock::time_point t0, std::vector<double>& streamMs, std::vector<double>& fullMs) {
+    const double shown = stream.waitForVersion(sceneVersion(), t0, 10000);
+    if (shown < 0 || !ok(cli->Get(frame))) return false;
+    streamMs.push_back(shown);
+    fullMs.push_back(msSince(t0));
+    return true;
+  };
 
   // A new BRDF each time: a changed constant in the code, so no cache of any kind can help.
   const std::string ggx = readText(sourceDir + "/shaders/brdfs/ggx.brdf");
   const std::string call = "return D_GGX(";
-  std::vector<double> editMs;
+  std::vector<double> editMs, editFullMs;
   for (int i = 0; i < 5; ++i) {
     std::string source = ggx;
     source.replace(source.find(call), call.size(), "return " + uniqueFactor(i) + " * D_GGX(");
@@ -59,41 +138,41 @@ bool measureService(const std::string& serverBinary, const std::string& sourceDi
     auto t0 = Clock::now();
     bool good = ok(cli->Put("/api/brdfs/" + name, source, "text/plain"), 201) &&
                 ok(cli->Patch(scene, nlohmann::json{{"objects", {{{"brdf", name}}}}}.dump(), "application/json")) &&
-                ok(cli->Get(frame));
+                timeChange(t0, editMs, editFullMs);
     if (!good) {
       std::fprintf(stderr, "BRDF edit round %d failed\n%s\n", i, server.logTail().c_str());
       return false;
     }
-    editMs.push_back(msSince(t0));
   }
 
-  std::vector<double> sliderMs;
+  std::vector<double> sliderMs, sliderFullMs;
   for (int i = 0; i < 11; ++i) {
     nlohmann::json patch = {{"objects", {{{"brdf", "ggx"}, {"params", {{"roughness", 0.2 + 0.05 * i}}}}}}};
     auto t0 = Clock::now();
-    if (!ok(cli->Patch(scene, patch.dump(), "application/json")) || !ok(cli->Get(frame))) return false;
-    if (i > 0) sliderMs.push_back(msSince(t0));  // the first switches back to ggx (cached program)
+    std::vector<double> streamMs, fullMs;
+    if (!ok(cli->Patch(scene, patch.dump(), "application/json")) || !timeChange(t0, streamMs, fullMs)) return false;
+    if (i == 0) continue;  // the first switches back to ggx (cached program)
+    sliderMs.push_back(streamMs[0]);
+    sliderFullMs.push_back(fullMs[0]);
   }
 
-  // Stream: count the PNG parts received in a fixed window while the session renders. A part is
-  // complete when the boundary after it arrives (the next part's headers follow at once).
-  int parts = 0;
+  // Frames per second on the stream over a fixed window: while the session renders on, and
+  // while the camera orbits (a PATCH of the yaw every 40 ms, as a drag in the UI sends them).
   const double windowMs = 4000;
-  auto streamCli = server.client(10);
   auto t0 = Clock::now();
-  std::string carry;
-  streamCli->Get("/api/sessions/default/stream", [&](const char* data, size_t len) {
-    carry.append(data, len);
-    for (size_t at; (at = carry.find("\r\n--frame\r\n")) != std::string::npos;) {
-      ++parts;
-      carry.erase(0, at + 1);
-    }
-    if (carry.size() > 64) carry.erase(0, carry.size() - 64);
-    return msSince(t0) < windowMs;
-  });
-  out.fps = parts / (msSince(t0) / 1000.0);
+  std::this_thread::sleep_for(std::chrono::duration<double, std::milli>(windowMs));
+  out.fps = stream.partsSince(t0) / (msSince(t0) / 1000.0);
+  t0 = Clock::now();
+  for (int i = 0; msSince(t0) < windowMs; ++i) {
+    nlohmann::json patch = {{"camera", {{"yaw", 2.0 * i}}}};
+    if (!ok(cli->Patch(scene, patch.dump(), "application/json"))) return false;
+    std::this_thread::sleep_until(t0 + std::chrono::milliseconds(40 * (i + 1)));
+  }
+  out.orbitFps = stream.partsSince(t0) / (msSince(t0) / 1000.0);
   out.editMs = median(editMs);
+  out.editFullMs = median(editFullMs);
   out.sliderMs = median(sliderMs);
+  out.sliderFullMs = median(sliderFullMs);
   return server.terminate() == 0;
 }
 
@@ -185,28 +264,34 @@ int runHttpBench(const std::string& serverBinary, const std::string& sourceDir) 
     beforeRuns.push_back(c);
   }
   auto medianOf = [](const std::vector<ServiceFigures>& runs) {
-    std::vector<double> edit, slider, fps;
-    for (const ServiceFigures& f : runs) {
-      edit.push_back(f.editMs);
-      slider.push_back(f.sliderMs);
-      fps.push_back(f.fps);
-    }
-    return ServiceFigures{median(edit), median(slider), median(fps)};
+    auto of = [&](double ServiceFigures::*field) {
+      std::vector<double> v;
+      for (const ServiceFigures& f : runs) v.push_back(f.*field);
+      return median(v);
+    };
+    return ServiceFigures{of(&ServiceFigures::editMs),      of(&ServiceFigures::sliderMs),
+                          of(&ServiceFigures::fps),         of(&ServiceFigures::editFullMs),
+                          of(&ServiceFigures::sliderFullMs), of(&ServiceFigures::orbitFps)};
   };
   const ServiceFigures isolated = medianOf(isolatedRuns), inProcess = medianOf(inProcessRuns),
                        before = medianOf(beforeRuns);
   if (rounds > 1) std::printf("(each figure: the median over %d rounds)\n", rounds);
   auto ratio = [](double a, double b) { return "ratio " + std::to_string(a / b).substr(0, 4); };
   header("Service over loopback HTTP (512x512, GGX sphere in the sky, 4 samples/pass)");
-  row("PUT new BRDF -> switch scene -> first frame (median of 5)", isolated.editMs, "ms", "target <= 200 (issue: 250)");
-  row("  the same with --in-process", inProcess.editMs, "ms", ratio(isolated.editMs, inProcess.editMs));
-  if (baseline) row("  the same with the baseline build", before.editMs, "ms", ratio(isolated.editMs, before.editMs));
-  row("parameter change -> next frame (median of 10)", isolated.sliderMs, "ms", "target <= 60");
-  row("  the same with --in-process", inProcess.sliderMs, "ms", ratio(isolated.sliderMs, inProcess.sliderMs));
-  if (baseline) row("  the same with the baseline build", before.sliderMs, "ms", ratio(isolated.sliderMs, before.sliderMs));
-  row("PNG frames received on the stream", isolated.fps, "frames/s", "target >= 20");
-  row("  the same with --in-process", inProcess.fps, "frames/s", ratio(isolated.fps, inProcess.fps));
-  if (baseline) row("  the same with the baseline build", before.fps, "frames/s", ratio(isolated.fps, before.fps));
+  // Each figure with --in-process and, when given, the baseline build, as ratios.
+  auto rows = [&](const std::string& what, double ServiceFigures::*field, const std::string& unit,
+                  const std::string& note) {
+    row(what, isolated.*field, unit, note);
+    row("  the same with --in-process", inProcess.*field, unit, ratio(isolated.*field, inProcess.*field));
+    if (baseline) row("  the same with the baseline build", before.*field, unit, ratio(isolated.*field, before.*field));
+  };
+  rows("PUT new BRDF -> switch scene -> first frame on the stream", &ServiceFigures::editMs, "ms",
+       "target <= 200; median of 5");
+  rows("  -> first 1-sample frame (GET /frame?min_spp=1)", &ServiceFigures::editFullMs, "ms", "");
+  rows("parameter change -> next frame on the stream", &ServiceFigures::sliderMs, "ms", "target <= 60; median of 10");
+  rows("  -> first 1-sample frame (GET /frame?min_spp=1)", &ServiceFigures::sliderFullMs, "ms", "");
+  rows("PNG frames received on the stream", &ServiceFigures::fps, "frames/s", "target >= 20");
+  rows("  while the camera orbits (a PATCH every 40 ms)", &ServiceFigures::orbitFps, "frames/s", "target >= 20");
 
   // A class: 30 sessions streaming at once (issue 12 measured 1.87 frames/s each, even), one
   // address (the cap on connections per address raised for it).

@@ -5,6 +5,7 @@
 // each DIR holding a modified copy of shaders/.
 #include "bench_shader_ab.h"
 
+#include <chrono>
 #include <cstdio>
 #include <vector>
 
@@ -21,6 +22,10 @@ int runShaderAbBench(const std::string& sourceDir, const std::vector<std::string
     std::shared_ptr<Renderer> renderer;
     std::unique_ptr<RenderView> views[2];  // kSamples each pass
     std::vector<double> ms[2];
+    // A camera move's first pass: the once-per-restart work (raster, clear, background of the
+    // whole image) and the preview (RenderSettings::previewPass), background visible.
+    std::unique_ptr<RenderView> moving;
+    std::vector<double> moveMs;
   };
   std::vector<Tree> trees(1 + againstDirs.size());
   trees[0].dir = sourceDir;
@@ -46,14 +51,29 @@ int runShaderAbBench(const std::string& sourceDir, const std::vector<std::string
         if (!(*view)->renderPass()) return 1;
       t.views[v] = std::move(view.value());
     }
+    auto moving = t.renderer->createView();
+    if (!moving) return 1;
+    t.moving = std::move(moving.value());
   }
-  for (int i = 0; i < 2 * rounds; ++i)
-    for (int v = 0; v < 2; ++v)
+  auto movedScene = [&](int step) {
+    Scene s = ggxScene(sourceDir, true, 4);
+    s.render.previewPass = true;
+    s.camera.yaw = float(step % 2) * 2.0f;
+    return s;
+  };
+  for (int i = -1; i < 2 * rounds; ++i) {
+    for (int v = 0; v < 2 && i >= 0; ++v)
       for (Tree& t : trees) {
         auto pass = t.views[v]->renderPass();
         if (!pass) return 1;
         t.ms[v].push_back(pass->lastPassMs);
       }
+    for (Tree& t : trees) {  // round -1 warms the moving view up
+      const auto t0 = std::chrono::steady_clock::now();
+      if (!t.moving->setScene(movedScene(i)) || !t.moving->renderPass()) return 1;
+      if (i >= 0) t.moveMs.push_back(msSince(t0));
+    }
+  }
   header("Shader trees against A = " + sourceDir + ": GGX sphere, cosine, 512x512, median of " +
          std::to_string(2 * rounds) + " interleaved passes");
   for (int v = 0; v < 2; ++v) {
@@ -65,6 +85,11 @@ int runShaderAbBench(const std::string& sourceDir, const std::vector<std::string
       row(trees[i].dir + what, b, "ms", "/ A " + std::to_string(b / a).substr(0, 5));
     }
   }
+  const double a = median(trees[0].moveMs);
+  row("A, camera moved: setScene + preview pass (sky visible)", a, "ms");
+  for (size_t i = 1; i < trees.size(); ++i)
+    row(trees[i].dir + ", camera moved", median(trees[i].moveMs), "ms",
+        "/ A " + std::to_string(median(trees[i].moveMs) / a).substr(0, 5));
   return 0;
 }
 

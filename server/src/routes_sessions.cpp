@@ -130,6 +130,9 @@ nlohmann::json convergenceJson(const Session::Convergence& c, std::optional<doub
 
 struct StreamState {
   uint64_t lastSeq = 0;
+  // The scene version in place when the client connected: older frames (still being encoded
+  // then) are not sent to it. A client already streaming gets them: they are the latest image.
+  uint64_t minSceneVersion = 0;
   bool opened = false;  // the first part's boundary and headers were sent
   Session::Clock::time_point lastSent = Session::Clock::now();
 };
@@ -143,7 +146,7 @@ bool writeNextPart(Service& service, Session& session, StreamState& state, httpl
     sink.done();
     return true;
   }
-  std::optional<StreamFrame> frame = session.waitForStreamFrame(state.lastSeq, 250ms);
+  std::optional<StreamFrame> frame = session.waitForStreamFrame(state.lastSeq, 250ms, state.minSceneVersion);
   if (!frame) {
     if (finished()) {
       sink.done();
@@ -390,6 +393,7 @@ void registerSessionRoutes(httplib::Server& server, Service& service) {
     }
     session->addStreamClient();
     auto state = std::make_shared<StreamState>();
+    state->minSceneVersion = session->stats().sceneVersion;
     res.set_header("Cache-Control", "no-store");
     // Chunked: HTTP/1.1 framing with an explicit end when the stream stops (server shutdown,
     // session deleted), instead of a body that ends only when the connection closes.

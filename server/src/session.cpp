@@ -94,9 +94,14 @@ Result<void> Session::applyScene(std::unique_lock<std::mutex>& updateLock, const
     return makeError(ErrorCode::Internal, "applyScene called without the scene update lock");
   // Called outside mutex_: setScene may compile for a while and must not stall stats or
   // streams. The view serializes it against the render thread's passes; the pass in progress
-  // is asked to stop at its next submission, so the change waits for that, not the whole pass.
-  view_->interruptPass();
-  Result<void> applied = withViewPriority([&] { return view_->setScene(scene); });
+  // is asked to stop at its next submission, so the change waits for that, not the whole pass
+  // Sessions are interactive: the first frame after a change comes from a quarter-cost preview.
+  Scene interactive = scene;
+  interactive.render.previewPass = true;
+  Result<void> applied = withViewPriority([&] {
+    view_->interruptPass();
+    return view_->setScene(interactive);
+  });
   if (!applied) return applied;
   initializer_ = nullptr;  // an explicit scene supersedes a pending default
   initPending_ = false;
@@ -113,9 +118,10 @@ Result<void> Session::applyScene(std::unique_lock<std::mutex>& updateLock, const
     renderError_.reset();
     publishRequested_ = true;
     // The old scene's frame must not reach a stream client that connects now; seq is kept so
-    // clients already streaming still see the next frame as newer.
+    // clients already streaming still see the next frame as newer. A frame of the old scene
+    // being read or encoded still reaches those: while a user drags the camera, every frame is
+    // one change behind by the time it is encoded, and dropping them left ~2 frames/s.
     latest_.png.reset();
-    pendingRaw_.reset();
   }
   wake_.notify_all();
   progress_.notify_all();
@@ -177,6 +183,8 @@ std::optional<Error> Session::renderError() const {
   return renderError_;
 }
 
+bool Session::hasImageLocked() const { return stats_.spp > 0 || stats_.preview; }
+
 bool Session::watchedLocked(Clock::time_point now) const {
   return streamClients_ > 0 || waiters_ > 0 || now < watchedUntil_;
 }
@@ -236,10 +244,12 @@ int Session::streamClients() const {
   return streamClients_;
 }
 
-std::optional<StreamFrame> Session::waitForStreamFrame(uint64_t afterSeq, std::chrono::milliseconds timeout) {
+std::optional<StreamFrame> Session::waitForStreamFrame(uint64_t afterSeq, std::chrono::milliseconds timeout,
+                                                      uint64_t minSceneVersion) {
   std::unique_lock lock(mutex_);
-  frames_.wait_for(lock, timeout, [&] { return stopping_ || latest_.seq > afterSeq; });
-  if (stopping_ || latest_.seq <= afterSeq || !latest_.png) return std::nullopt;
+  auto fresh = [&] { return latest_.seq > afterSeq && latest_.png && latest_.sceneVersion >= minSceneVersion; };
+  frames_.wait_for(lock, timeout, [&] { return stopping_ || fresh(); });
+  if (stopping_ || !fresh()) return std::nullopt;
   return latest_;
 }
 
@@ -281,6 +291,9 @@ void Session::publishFrame(std::unique_lock<std::mutex>& lock) {
   Frame& f = frame.value();
   noteStatsLocked(f.stats, false);
   if (f.width <= 0 || f.height <= 0 || f.rgba8.size() < static_cast<size_t>(f.width) * f.height * 4) return;
+  // A scene applied between the pass and this read: nothing of it to show yet (its objects
+  // would be black). Its preview comes next.
+  if (f.stats.spp == 0 && !f.stats.preview) return;
   pendingRaw_ = RawFrame{std::move(f.rgba8), f.width, f.height, f.stats.spp, f.stats.sceneVersion, f.stats.done()};
   encodeWake_.notify_one();
 }
@@ -288,7 +301,8 @@ void Session::publishFrame(std::unique_lock<std::mutex>& lock) {
 std::vector<uint8_t> Session::encodeStreamPng(const RawFrame& raw) {
   // A stream part's headers go out before its frame exists (see the stream route), so the
   // sample count travels inside the PNG.
-  const std::vector<std::pair<std::string, std::string>> text{{kSamplesPngKeyword, std::to_string(raw.spp)}};
+  const std::vector<std::pair<std::string, std::string>> text{{kSamplesPngKeyword, std::to_string(raw.spp)},
+                                                              {kScenePngKeyword, std::to_string(raw.sceneVersion)}};
   // The final frame is always full size, however few samples max_samples allows.
   if (!raw.done && raw.spp < kPreviewBelowSpp && raw.width * raw.height >= kPreviewMinPixels) {
     int w = 0, h = 0;
@@ -310,12 +324,10 @@ void Session::encodeLoop() {
     lock.unlock();
     auto png = std::make_shared<const std::vector<uint8_t>>(encodeStreamPng(raw));
     lock.lock();
-    // A scene applied while the frame was read or encoded makes it stale: never show the old
-    // scene after the new one.
-    if (raw.sceneVersion < stats_.sceneVersion) continue;
     latest_.png = std::move(png);
     latest_.seq += 1;
     latest_.spp = raw.spp;
+    latest_.sceneVersion = raw.sceneVersion;
     frames_.notify_all();
   }
 }
@@ -328,7 +340,7 @@ void Session::renderLoop() {
     bool waiterSatisfied = !waitTargets_.empty() && stats_.spp >= *waitTargets_.begin();
     bool wantPass = canRender && !stats_.done() && watchedLocked(Clock::now()) && pendingViewCalls_ == 0 &&
                     !waiterSatisfied;
-    bool wantPublish = canRender && streamClients_ > 0 && publishRequested_ && stats_.spp > 0 && pendingViewCalls_ == 0;
+    bool wantPublish = canRender && streamClients_ > 0 && publishRequested_ && hasImageLocked() && pendingViewCalls_ == 0;
     if (!wantPass && !wantPublish) {
       // Nothing to do until a scene change, a watcher, a stream client or stop. A watched-until
       // deadline needs no timed wake: it only ever turns rendering off, checked after each pass.
@@ -337,7 +349,8 @@ void Session::renderLoop() {
     }
     if (wantPass) {
       uint64_t versionBefore = stats_.sceneVersion;
-      const uint64_t sppBefore = stats_.spp;
+      const uint64_t sppBefore = stats_.spp, passesBefore = stats_.passes;
+      const bool previewBefore = stats_.preview;
       const uint64_t pixels = uint64_t(std::max(render_.width, 0)) * uint64_t(std::max(render_.height, 0));
       lock.unlock();
       Result<FrameStats> pass = view_->renderPass();
@@ -362,7 +375,10 @@ void Session::renderLoop() {
       noteStatsLocked(pass.value(), true);
       progress_.notify_all();
       bool due = publishRequested_ || stats_.done() || Clock::now() - lastPublish_ >= kPublishInterval;
-      if (streamClients_ > 0 && stats_.spp > 0 && due) publishFrame(lock);
+      // A pass interrupted for a scene change (RenderView::interruptPass) added nothing to show,
+      // and reading a frame would first complete it, delaying the change by most of a pass.
+      const bool progressed = pass->passes != passesBefore || pass->preview != previewBefore;
+      if (streamClients_ > 0 && hasImageLocked() && due && progressed) publishFrame(lock);
     } else {
       publishFrame(lock);
     }

@@ -67,14 +67,33 @@ void main() {
   // packed origin; workgroup row y shades the band's tile row (y * step) mod rows, so that the
   // CPU device's threads each get rows from all over the band (render_view.cpp, renderPass).
   uint permutation = floatBitsToUint(brdfa_pc.cameraPos.w);
-  uint tileRow = (gl_WorkGroupID.y * (permutation >> 16)) % (permutation & 0xffffu);
-  uvec2 p = uvec2(gl_GlobalInvocationID.x, tileRow * 8u + gl_LocalInvocationID.y) +
-            uvec2(brdfa_pc.target.z & 0xffffu, brdfa_pc.target.z >> 16);
-  if (p.x >= brdfa_pc.frame.x || p.y >= brdfa_pc.frame.y) return;
+  // (y * step) mod rows through a float quotient, exact for products below 2^24 (bands of at
+  // most 512 rows): a CPU device divides integers one lane at a time.
+  uint rows = permutation & 0xffffu, product = gl_WorkGroupID.y * (permutation >> 16);
+  uint tileRow = product - rows * uint(float(product) / float(rows));
+  // A preview pass (target.w bit 1, RenderSettings::previewPass) shades one pixel of each
+  // 2x2 block: invocation q stands for the block at origin + 2q, and its value goes to every
+  // pixel of the block this object covers. The next pass overwrites it.
+  bool preview = (brdfa_pc.target.w & 2u) != 0u;
+  uvec2 base = (preview ? 2u : 1u) * uvec2(gl_GlobalInvocationID.x, tileRow * 8u + gl_LocalInvocationID.y) +
+               uvec2(brdfa_pc.target.z & 0xffffu, brdfa_pc.target.z >> 16);
+  if (base.x >= brdfa_pc.frame.x || base.y >= brdfa_pc.frame.y) return;
 
+  // Bit k: pixel base + (k & 1, k >> 1) is this object's, and is written. A loop, not an if:
+  // a CPU device skips a loop no lane enters, but runs both sides of an if for every lane.
+  uint blockMask = 0u;
+  for (uint k = 0u; k < (preview ? 4u : 0u); ++k) {
+    uvec2 q = base + uvec2(k & 1u, k >> 1u);
+    if (q.x < brdfa_pc.frame.x && q.y < brdfa_pc.frame.y &&
+        brdfa_objectId(brdfa_gSurface(brdfa_pixelIndex(q))) == brdfa_pc.target.x)
+      blockMask |= 1u << k;
+  }
+  uint shaded = blockMask != 0u ? uint(findLSB(blockMask)) : 0u;  // the block's pixel to shade
+  uvec2 p = base + uvec2(shaded & 1u, shaded >> 1u);
   uint pixel = brdfa_pixelIndex(p);
   uvec2 surface = brdfa_gSurface(pixel);
-  if (brdfa_objectId(surface) != brdfa_pc.target.x) return;  // another object, or background
+  if (preview ? blockMask == 0u : brdfa_objectId(surface) != brdfa_pc.target.x) return;  // another object, or background
+  if (!preview) blockMask = 1u;
 #if defined(BRDFA_TANGENT_FRAME) || defined(BRDFA_TEXCOORD)
   uvec4 detail = brdfa_gDetail(pixel);
   texCoord = uintBitsToFloat(detail.yz);
@@ -225,9 +244,13 @@ void main() {
   vec4 valueA = vec4((sumAll - sumB) * intensity, float(keptAll - keptB));
   vec4 valueB = vec4(sumB * intensity, float(keptB));
   // The first pass after a restart overwrites this pixel's halves instead of adding, so a
-  // change of BRDF or parameters needs no clear of the whole buffer.
+  // change of BRDF or parameters needs no clear of the whole buffer; a preview overwrites too.
   bool overwrite = brdfa_pc.target.w != 0u;
-  brdfa_accumulate(0u, pixel, valueA, overwrite);
-  brdfa_accumulate(1u, pixel, valueB, overwrite);
+  for (uint k = 0u; k < (preview ? 4u : 1u); ++k) {
+    if ((blockMask & (1u << k)) == 0u) continue;
+    uint written = brdfa_pixelIndex(base + uvec2(k & 1u, k >> 1u));
+    brdfa_accumulate(0u, written, valueA, overwrite);
+    brdfa_accumulate(1u, written, valueB, overwrite);
+  }
   if (dropped != 0u) atomicAdd(brdfa_nanSamples, dropped);
 }

@@ -2,17 +2,18 @@
 // by every compute kernel (shade, background, resolve). Names carry the brdfa_ prefix so they
 // can never collide with names in a user's BRDF file.
 
-// Binding 0 and 3 are plain storage buffers for the analysis and check kernels, which pass
-// their inputs and results through them. Render views bind them too, but read and write the
-// same memory through the texel views below: on a CPU device (lavapipe) a storage-buffer load
-// or store is a per-lane loop with a bounds check per component, while a texel fetch is one
-// gather of the whole texel and an image store one loop per lane (bench --only renderer).
+// Binding 0 is a plain storage buffer for the analysis and check kernels, which pass their
+// inputs through it; render views bind the G-buffer there and read it through the texel views
+// below. The accumulators (binding 3) are a storage buffer in every kernel: on lavapipe an
+// image store to a storage texel buffer cost ~6 ms more per 2 x 512^2 stores, and a 1-sample
+// pass of the GGX sphere took 30 ms with the accumulators as a texel buffer against 22 ms as
+// a storage buffer (bench --only shaders, interleaved).
 layout(std430, set = 0, binding = 0) readonly buffer BrdfaGbuffer { vec4 brdfa_gbuffer[]; };
 
 // Two half accumulators (sample i of a pixel goes to half i & 1, each half with its own random
 // sequence): rgb = sum of radiance samples, a = number of samples kept. The difference of
-// their means estimates the error of the combined mean. Texel i is half A of pixel i, texel
-// planeSize + i its half B (brdfa_accumTexels below).
+// their means estimates the error of the combined mean. Entry i is half A of pixel i, entry
+// planeSize + i its half B (brdfa_accumLoad, brdfa_accumStore below).
 layout(std430, set = 0, binding = 3) buffer BrdfaAccum { vec4 brdfa_accum[]; };
 layout(std430, set = 0, binding = 4) buffer BrdfaCounters { uint brdfa_nanSamples; uint brdfa_counterPad[3]; };
 layout(set = 0, binding = 5) uniform samplerCube brdfa_envMap;
@@ -38,7 +39,6 @@ uvec2 brdfa_envEntry(uint i) { return texelFetch(brdfa_envTable, int(i)).xy; }
 // (brdfa_viewRay), which gives V exactly.
 layout(set = 0, binding = 10) uniform usamplerBuffer brdfa_gSurfaceTexels;
 layout(set = 0, binding = 11) uniform usamplerBuffer brdfa_gDetailTexels;
-layout(set = 0, binding = 12, rgba32f) uniform imageBuffer brdfa_accumTexels;
 // Pixels whose coverage differs between the G-buffer slices (an object in some, background in
 // others), R32UI pixel indices: the edge kernel's work list once every slice is known (CPU
 // devices).
@@ -63,12 +63,8 @@ uint brdfa_planeSize() { return brdfa_pc.frame.x * brdfa_pc.frame.y; }
 uint brdfa_halfOffset(uint halfIndex) { return halfIndex * brdfa_planeSize(); }
 uvec2 brdfa_gSurface(uint i) { return texelFetch(brdfa_gSurfaceTexels, int(i)).xy; }
 uvec4 brdfa_gDetail(uint i) { return texelFetch(brdfa_gDetailTexels, int(i)); }
-vec4 brdfa_accumLoad(uint halfIndex, uint pixel) {
-  return imageLoad(brdfa_accumTexels, int(brdfa_halfOffset(halfIndex) + pixel));
-}
-void brdfa_accumStore(uint halfIndex, uint pixel, vec4 value) {
-  imageStore(brdfa_accumTexels, int(brdfa_halfOffset(halfIndex) + pixel), value);
-}
+vec4 brdfa_accumLoad(uint halfIndex, uint pixel) { return brdfa_accum[brdfa_halfOffset(halfIndex) + pixel]; }
+void brdfa_accumStore(uint halfIndex, uint pixel, vec4 value) { brdfa_accum[brdfa_halfOffset(halfIndex) + pixel] = value; }
 // Adds `value` to a half's texel, or overwrites it on the first pass after a restart (so a
 // change of BRDF or parameters needs no clear of the whole buffer).
 void brdfa_accumulate(uint halfIndex, uint pixel, vec4 value, bool overwrite) {

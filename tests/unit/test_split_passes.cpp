@@ -156,12 +156,17 @@ TEST(SplitPasses, InterruptedPassesCompleteToTheSameImage) {
 
   // A frame read while a pass is interrupted completes that pass first: its first pass after a
   // restart leaves no pixel of the old image (here the previous BRDF's), and the count is exact.
-  Scene other = scene;
+  // Larger than the probe of a changed BRDF's cost (kProbeUnits), so the pass has a second
+  // submission to be interrupted before.
+  Scene before = scene;
+  before.render.width = 200;
+  before.render.height = 180;
+  Scene other = before;
   other.objects[0].brdf = builtin("lambert");
   auto afterSwitch = [&](bool interrupt) -> Frame {
     auto v = renderer->createView();
     EXPECT_TRUE(v.ok());
-    if (!v.ok() || !v.value()->setScene(scene).ok()) return {};
+    if (!v.ok() || !v.value()->setScene(before).ok()) return {};
     for (int guard = 0; guard < 10000; ++guard) {
       auto pass = v.value()->renderPass();
       if (!pass.ok() || pass->done()) break;
@@ -206,6 +211,79 @@ TEST(SplitPasses, InterruptedPassesCompleteToTheSameImage) {
   for (size_t i = 0; i < again->rgba32f.size(); ++i)
     ASSERT_NEAR(again->rgba32f[i], reference.rgba32f[i], 1e-5f * std::max(1.0f, std::abs(reference.rgba32f[i])))
         << "value " << i << " (pixel " << i / 4 << ")";
+}
+
+// Issue 15: with RenderSettings::previewPass the first pass after a restart is a preview, one
+// sample at one pixel of each 2x2 block shown in the whole block, counted nowhere; the first
+// real pass overwrites it, so the image after it (and every later one) is the image without a
+// preview. In the white furnace every object pixel of the preview is exactly 1.
+TEST(SplitPasses, PreviewPassComesFirstAndLeavesNoTrace) {
+  for (double target : {0.0, 0.05}) {  // whole passes, and split ones interrupted in the preview
+    SCOPED_TRACE("submissionTargetMs " + std::to_string(target));
+    auto renderer = makeRenderer(target);
+    ASSERT_TRUE(renderer);
+    Scene scene = twoObjectScene();
+    scene.render.width = 256;  // kPreviewMinPixels
+    scene.render.height = 260;
+    scene.objects[1].brdf = builtin("lambert");
+    scene.objects[1].params["Kd"] = {1, 1, 1};
+    scene.environment.name = "furnace";
+    scene.environment.visible = false;
+    const Frame plain = render(*renderer, scene);
+    Scene onePass = scene;  // G-buffer slice 0's coverage, which the preview shades
+    onePass.render.maxSamples = 1;
+    const Frame plainFirst = render(*renderer, onePass);
+
+    Scene withPreview = scene;
+    withPreview.render.previewPass = true;
+    auto view = renderer->createView();
+    ASSERT_TRUE(view.ok());
+    ASSERT_TRUE(view.value()->setScene(withPreview).ok());
+    // A preview runs to its end; the request is taken by the pass after it (split passes).
+    if (target > 0) view.value()->interruptPass();
+    auto first = view.value()->renderPass();
+    ASSERT_TRUE(first.ok()) << first.error().message;
+    EXPECT_TRUE(first->preview);
+    EXPECT_EQ(first->spp, 0u);
+    EXPECT_EQ(first->passes, 0u);
+    auto previewFrame = view.value()->readFrame(true);
+    ASSERT_TRUE(previewFrame.ok());
+    EXPECT_TRUE(previewFrame->stats.preview);
+    // The teapot (white Lambertian, cosine sampling, furnace): 1 exactly wherever the first
+    // pass's image is 1. The GGX sphere: light in most of its pixels too (a single sample of
+    // it can be 0).
+    size_t ones = 0, lit = 0, previewLit = 0;
+    for (size_t i = 0; i < plainFirst.rgba32f.size(); i += 4) {
+      if (std::abs(plainFirst.rgba32f[i] - 1.0f) < 1e-5f) {
+        ++ones;
+        ASSERT_NEAR(previewFrame->rgba32f[i], 1.0f, 1e-5f) << "pixel " << i / 4;
+      } else if (plainFirst.rgba32f[i] > 0.0f) {
+        ++lit;
+        previewLit += previewFrame->rgba32f[i] > 0.0f;
+      }
+    }
+    EXPECT_GT(ones, 2000u);
+    EXPECT_GT(lit, 2000u);
+    EXPECT_GT(previewLit, lit * 3 / 4);
+    for (int guard = 0; guard < 10000; ++guard) {
+      auto pass = view.value()->renderPass();
+      ASSERT_TRUE(pass.ok());
+      if (guard == 0 && target > 0) {
+        EXPECT_EQ(pass->spp, 0u) << "the first pass was not interrupted";
+        EXPECT_TRUE(pass->preview) << "an interrupted first pass still shows the preview";
+        continue;
+      }
+      EXPECT_FALSE(pass->preview);
+      if (pass->done()) break;
+    }
+    auto last = view.value()->readFrame(true);
+    ASSERT_TRUE(last.ok());
+    EXPECT_EQ(last->stats.spp, plain.stats.spp);
+    EXPECT_EQ(last->stats.passes, plain.stats.passes);
+    for (size_t i = 0; i < last->rgba32f.size(); ++i)
+      ASSERT_NEAR(last->rgba32f[i], plain.rgba32f[i], 1e-5f * std::max(1.0f, std::abs(plain.rgba32f[i])))
+          << "value " << i << " (pixel " << i / 4 << ")";
+  }
 }
 
 Scene furnaceScene(std::shared_ptr<const BrdfDefinition> brdf, int size, int samplesPerFrame, int spp) {

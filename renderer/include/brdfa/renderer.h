@@ -132,6 +132,9 @@ struct FrameStats {
   // part in MIS, a BRDF without a sampler falls back to cosine).
   std::vector<std::string> warnings;
   uint64_t sceneVersion = 0;  // increments on every setScene that changed the scene
+  // The image is a preview (RenderSettings::previewPass): no pass since the last restart
+  // yet, spp 0, but a frame read shows one sample per 2x2 block of pixels.
+  bool preview = false;
 };
 
 // A resolved frame read back from the device.
@@ -170,7 +173,8 @@ class RenderView {
 
   // Asks the pass in progress, or else the next one, to stop at its next queue-submission
   // boundary and return (its samples not yet counted in spp), so that a setScene() waiting for
-  // the view gets it after one submission instead of a whole pass. The next renderPass() or
+  // the view gets it after one submission instead of a whole pass. A preview pass
+  // (RenderSettings::previewPass) runs to its end. The next renderPass() or
   // readFrame() completes the interrupted pass with the same samples, unless a setScene() that
   // restarts accumulation drops it. setScene() withdraws a request no pass has taken yet.
   // Never blocks. The first passes after a restart are split into short submissions (about

@@ -63,6 +63,14 @@ struct RenderSettings {
   uint32_t seed = 0;
   float exposure = 0.0f;  // stops; PNG = sRGB(tonemap(L * 2^exposure))
   ToneMap toneMap = ToneMap::Clamp;
+  // Not part of the scene JSON: set by interactive users (the server's sessions). After each
+  // restart of accumulation, in images of at least kPreviewMinPixels, a preview pass comes
+  // first: one sample at one pixel of every 2x2 block, shown in the whole block
+  // (FrameStats::preview), for about a quarter of a 1-sample pass's cost. The first real pass
+  // overwrites it; it counts in no sample count, error estimate or pass count. Changing it
+  // alone changes nothing in the image.
+  bool previewPass = false;
+  static constexpr uint64_t kPreviewMinPixels = 256 * 256;
 };
 
 // One texture slot of an object (iTexture0..3 in order). `name` is a built-in texture or an

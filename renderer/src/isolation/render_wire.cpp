@@ -14,7 +14,7 @@ NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(ClaimVerdict, name, claimed, holds, measured)
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(Camera, position, yaw, pitch, fov)
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(EnvironmentSettings, name, intensity, rotation, visible)
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(RenderSettings, width, height, samplesPerFrame, maxSamples, sampling, targetError,
-                                   seed, exposure, toneMap)
+                                   seed, exposure, toneMap, previewPass)
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(TextureBinding, name, srgb)
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(DeviceInfo, name, type, driver, apiVersion)
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(CompileInfo, warnings, compileMs, cached)
@@ -49,7 +49,7 @@ using nlohmann::json;
 // The hand-written conversions below list every field; a field added to one of these types
 // must be added there too (then update the size here). x86-64 Linux, the one target built.
 #if defined(__x86_64__) && defined(__linux__)
-static_assert(sizeof(FrameStats) == 240, "FrameStats changed: update toJson/statsFromJson");
+static_assert(sizeof(FrameStats) == 248, "FrameStats changed: update toJson/statsFromJson");
 static_assert(sizeof(RendererOptions) == 264, "RendererOptions changed: update toJson/optionsFromJson");
 static_assert(sizeof(SceneObject) == 192, "SceneObject changed: update toJson(Scene)/sceneFromJson");
 #endif
@@ -176,6 +176,7 @@ json toJson(const FrameStats& f) {
               {"sceneVersion", f.sceneVersion},
               {"submissions", f.submissions},
               {"maxSubmissionMs", f.maxSubmissionMs},
+              {"preview", f.preview},
               {"breakdown", json::array({f.breakdown.setupMs, f.breakdown.shadeMs, f.breakdown.edgeMs,
                                          f.breakdown.resolveMs, f.breakdown.otherMs})}};
 }
@@ -202,6 +203,7 @@ FrameStats statsFromJson(const json& j) {
   j.at("sceneVersion").get_to(f.sceneVersion);
   j.at("submissions").get_to(f.submissions);
   j.at("maxSubmissionMs").get_to(f.maxSubmissionMs);
+  j.at("preview").get_to(f.preview);
   const json& b = j.at("breakdown");
   if (!b.is_array() || b.size() != 5) throw json::type_error::create(302, "breakdown: 5 numbers expected", &b);
   b[0].get_to(f.breakdown.setupMs);

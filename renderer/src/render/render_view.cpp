@@ -30,20 +30,17 @@ constexpr double kProbeUnits = 2048;
 constexpr double kGrowth = 4;
 constexpr double kCostDecay = 0.75;
 constexpr double kTail = 1.25;     // a pass's last submission may take this many budgets
-// The cost of a dispatched pixel apart from its samples, in cost units (pixel-samples). A CPU
-// device runs the kernel's straight-line code (G-buffer, frame, accumulators) for every pixel
-// of a dispatch, covered or not, even past an early return: measured on lavapipe (GGX, cosine,
-// 512x512) that part cost as much as 5-7 samples of a covered pixel (bench --only renderer).
-// Without it a cost learned at 16 samples/pass read 1-sample passes 5x too cheap.
-constexpr double kDispatchUnitsPerPixel = 4;
 // The passes right after the first one of a restart (2 and 4 samples) are what the next change
-// of a user moving a slider or the camera meets: their submissions aim at no more than this,
-// so that interruptPass() takes effect within about that long. The first pass, whose frame
-// the user waits for, and later ones use the device's target: every submission of a dispatch
-// split more finely waits for the slowest of the CPU device's threads (a 1-sample pass of the
-// GGX sphere took 50 ms in 5 submissions against 35 ms in one).
+// of a user moving a slider or the camera meets: each is split into at least this many
+// submissions, so that interruptPass() takes effect within a fraction of it. By the pass's
+// cost units, not by time: a unit's time differs several-fold between 1 and 16 samples a
+// pass (the kernel's per-pixel part, run for every dispatched pixel), and sized by a 12 ms
+// target a 2-sample pass went in 17 submissions. The first pass, whose frame the user waits
+// for, and later ones use the device's target alone: every submission waits for the slowest
+// of a CPU device's threads (a 1-sample pass of the GGX sphere took 50 ms in 5 submissions
+// against 35 ms in one).
 constexpr uint64_t kInteractivePasses = 3;
-constexpr double kInteractiveSubmissionMs = 12;
+constexpr double kInteractiveSplits = 4;
 
 uint32_t groups(uint32_t n, uint32_t size) { return (n + size - 1) / size; }
 
@@ -91,15 +88,14 @@ Result<void> RenderViewImpl::init() {
   cmd_ = std::move(cmd.value());
 
   // New objects are built before the old ones are released, hence room for two scenes' worth.
-  VkDescriptorPoolSize sizes[5] = {{VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 6 * kMaxJitter},
+  VkDescriptorPoolSize sizes[4] = {{VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 6 * kMaxJitter},
                                    {VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, kMaxJitter + 8 * kMaxObjects},
                                    {VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, 4 * kMaxObjects},
-                                   {VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER, 4 * kMaxJitter},
-                                   {VK_DESCRIPTOR_TYPE_STORAGE_TEXEL_BUFFER, kMaxJitter}};
+                                   {VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER, 4 * kMaxJitter}};
   VkDescriptorPoolCreateInfo pci{VK_STRUCTURE_TYPE_DESCRIPTOR_POOL_CREATE_INFO};
   pci.flags = VK_DESCRIPTOR_POOL_CREATE_FREE_DESCRIPTOR_SET_BIT;
   pci.maxSets = kMaxJitter + 2 * kMaxObjects;
-  pci.poolSizeCount = 5;
+  pci.poolSizeCount = 4;
   pci.pPoolSizes = sizes;
   BRDFA_VK_TRY(vkCreateDescriptorPool(ctx.device(), &pci, nullptr, &pool_));
   VkDescriptorSetLayout layouts[kMaxJitter];
@@ -159,7 +155,6 @@ Result<void> RenderViewImpl::resize(uint32_t width, uint32_t height) {
 
   for (TexelView& v : surfaceViews_) v.reset();
   for (TexelView& v : detailViews_) v.reset();
-  accumView_.reset();
   edgeView_.reset();
   edgeListKnown_ = false;
   ImageSpec g;
@@ -204,7 +199,7 @@ Result<void> RenderViewImpl::resize(uint32_t width, uint32_t height) {
       {&gbuffer_, sliceStride_ * jitterCount_,
        storage | VK_BUFFER_USAGE_UNIFORM_TEXEL_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT, host},
       {&accum_, pixels * 2 * 16,
-       storage | VK_BUFFER_USAGE_STORAGE_TEXEL_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT, host},
+       storage | VK_BUFFER_USAGE_TRANSFER_DST_BIT, host},
       {&outRgba8_, pixels * 4, storage, true},
       {&outFloat_, pixels * 16, storage, true},
       {&partials_, VkDeviceSize(partialCount(width, height)) * 16, storage, true},
@@ -224,9 +219,6 @@ Result<void> RenderViewImpl::resize(uint32_t width, uint32_t height) {
     if (!detail) return detail.takeError();
     detailViews_[slice] = std::move(detail.value());
   }
-  auto accumView = TexelView::create(ctx, accum_, VK_FORMAT_R32G32B32A32_SFLOAT, 0, VK_WHOLE_SIZE);
-  if (!accumView) return accumView.takeError();
-  accumView_ = std::move(accumView.value());
   auto edgeView = TexelView::create(ctx, edgeList_, VK_FORMAT_R32_UINT, 0, VK_WHOLE_SIZE);
   if (!edgeView) return edgeView.takeError();
   edgeView_ = std::move(edgeView.value());
@@ -245,8 +237,8 @@ void RenderViewImpl::writeViewDescriptors() {
   for (uint32_t slice = 0; slice < kMaxJitter; ++slice) {
     const uint32_t s = slice < jitterCount_ ? slice : 0;
     VkDescriptorBufferInfo infos[6];
-    VkWriteDescriptorSet w[12] = {};
-    for (uint32_t i = 0; i < 12; ++i) {
+    VkWriteDescriptorSet w[11] = {};
+    for (uint32_t i = 0; i < 11; ++i) {
       w[i].sType = VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET;
       w[i].dstSet = viewSets_[slice];
       w[i].descriptorCount = 1;
@@ -262,14 +254,14 @@ void RenderViewImpl::writeViewDescriptors() {
     w[6].dstBinding = 5;
     w[6].descriptorType = VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER;
     w[6].pImageInfo = &env;
-    const VkBufferView texels[5] = {table, surfaceViews_[s].view(), detailViews_[s].view(), accumView_.view(),
-                                    edgeView_.view()};
-    for (uint32_t i = 0; i < 5; ++i) {
-      w[7 + i].dstBinding = 9 + i;
-      w[7 + i].descriptorType = i == 3 ? VK_DESCRIPTOR_TYPE_STORAGE_TEXEL_BUFFER : VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER;
-      w[7 + i].pTexelBufferView = &texels[i];
+    const std::pair<uint32_t, VkBufferView> texels[4] = {
+        {9, table}, {10, surfaceViews_[s].view()}, {11, detailViews_[s].view()}, {13, edgeView_.view()}};
+    for (uint32_t i = 0; i < 4; ++i) {
+      w[7 + i].dstBinding = texels[i].first;
+      w[7 + i].descriptorType = VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER;
+      w[7 + i].pTexelBufferView = &texels[i].second;
     }
-    vkUpdateDescriptorSets(r_->ctx().device(), 12, w, 0, nullptr);
+    vkUpdateDescriptorSets(r_->ctx().device(), 11, w, 0, nullptr);
   }
 }
 
@@ -445,6 +437,9 @@ Result<void> RenderViewImpl::setScene(const Scene& scene) {
   // growth after it: a slider's change costs a probe and the pass, not a ramp of submissions
   // (which, each with its wake-ups, cost a loaded CPU ~10 ms a frame).
   if (!sameShading) {
+    // The same pipelines with other parameters: the old cost is a fair guess, kept to let the
+    // estimate fall to it after the probe (see renderPass).
+    priorMsPerUnit_ = samePrograms ? msPerUnit_ : 0;
     msPerUnit_ = 0;
     if (!samePrograms) {
       maxUnits_ = 0;
@@ -453,6 +448,7 @@ Result<void> RenderViewImpl::setScene(const Scene& scene) {
   }
   if (restart) {
     partial_.reset();  // its samples are of the old image
+    previewPending_ = scene.render.previewPass && uint64_t(width) * height >= RenderSettings::kPreviewMinPixels;
     const uint64_t version = stats_.sceneVersion;
     stats_ = FrameStats{};
     stats_.sceneVersion = version;
@@ -732,14 +728,19 @@ Result<FrameStats> RenderViewImpl::passLocked(bool interruptible) {
   // Passes after a restart ramp up 1, 2, 4, ... samples to samples_per_frame, so the first
   // frame of a change arrives quickly.
   const uint64_t ramp = stats_.passes < 20 ? (uint64_t(1) << stats_.passes) : UINT64_MAX;
-  const uint32_t count = resumed ? resumed->count
-                                 : static_cast<uint32_t>(std::min<uint64_t>(
-                                       {static_cast<uint64_t>(scene_.render.samplesPerFrame), ramp, maxSamples - stats_.spp}));
+  // A preview (RenderSettings::previewPass) shades one sample at one pixel of each 2x2
+  // block, over workgroups of 16x16 pixels: `scale` 2.
+  const bool preview = resumed ? resumed->preview : previewPending_;
+  const uint32_t scale = preview ? 2 : 1;
+  const uint32_t count = preview ? 1
+                         : resumed ? resumed->count
+                                   : static_cast<uint32_t>(std::min<uint64_t>(
+                                         {static_cast<uint64_t>(scene_.render.samplesPerFrame), ramp, maxSamples - stats_.spp}));
   const uint32_t slice = resumed ? resumed->slice : sliceForPass(stats_.passes);
   const bool firstPass = stats_.passes == 0;
   // Refresh the error estimate in the last submission when it is due (and a second half exists).
   const bool refreshError = resumed ? resumed->refreshError
-                                    : stats_.passes >= 1 &&
+                                    : !preview && stats_.passes >= 1 &&
                                           (sinceErrorMs_ >= kErrorRefreshMs || stats_.spp + count >= maxSamples);
 
   // Cost in units: one per sample of a covered pixel. An invocation off the object costs next
@@ -747,24 +748,25 @@ Result<FrameStats> RenderViewImpl::passLocked(bool interruptible) {
   // workgroup keeps empty tiles from being free.
   const double groupPixels = kShadeGroup * kShadeGroup;
   auto groupUnits = [&](const ObjectState& o, size_t group, uint32_t n) {
-    return (o.cover.empty() ? groupPixels : o.cover[group]) * n + groupPixels * kDispatchUnitsPerPixel;
+    const double covered = o.cover.empty() || preview ? groupPixels : o.cover[group];  // cover: per 8x8 pixels
+    return covered * n + 1.0;
   };
+  // An object's dispatch grid: workgroups over its bounds (over its 2x2 blocks in a preview).
+  auto gridX = [&](const ObjectState& o) { return groups((o.pixels.width + scale - 1) / scale, kShadeGroup); };
+  auto gridY = [&](const ObjectState& o) { return groups((o.pixels.height + scale - 1) / scale, kShadeGroup); };
   double targetMs = r_->ctx().submissionTargetMs(cmd_.fence());
-  if (targetMs > 0 && stats_.passes >= 1 && stats_.passes < kInteractivePasses)
-    targetMs = std::min(targetMs, kInteractiveSubmissionMs);
   uint32_t chunk = count;  // samples per sweep
   if (resumed)  // a sweep in progress goes on with the same samples
     chunk = resumed->chunk;
   else if (targetMs > 0 && msPerUnit_ > 0)
-    chunk = static_cast<uint32_t>(std::clamp(
-        std::floor(targetMs / msPerUnit_ / groupPixels - kDispatchUnitsPerPixel), 1.0, double(count)));
+    chunk = static_cast<uint32_t>(std::clamp(std::floor(targetMs / msPerUnit_ / groupPixels), 1.0, double(count)));
   std::vector<size_t> visible;  // objects on screen
   double passUnits = 0;         // to let the last submission take up to kTail budgets
   for (size_t i = 0; i < objects_.size(); ++i) {
     const ObjectState& o = objects_[i];
     if (o.pixels.width == 0 || o.pixels.height == 0) continue;
     visible.push_back(i);
-    const size_t n = size_t(groups(o.pixels.width, kShadeGroup)) * groups(o.pixels.height, kShadeGroup);
+    const size_t n = size_t(gridX(o)) * gridY(o);
     for (size_t g = 0; g < n; ++g) passUnits += groupUnits(o, g, count);
   }
 
@@ -819,16 +821,18 @@ Result<FrameStats> RenderViewImpl::passLocked(bool interruptible) {
     // The units this submission may take: no measurement yet, a probe; then what the target
     // allows at the measured cost, growing at most kGrowth times the largest measured
     // submission (a cost measured where the objects are thin can be too low).
-    const double sized = targetMs <= 0     ? INFINITY
-                         : msPerUnit_ <= 0 ? kProbeUnits
-                                           : std::min(targetMs / msPerUnit_, kGrowth * maxUnits_);
+    const bool interactive = targetMs > 0 && stats_.passes >= 1 && stats_.passes < kInteractivePasses;
+    const double sized = std::min(targetMs <= 0     ? INFINITY
+                                  : msPerUnit_ <= 0 ? kProbeUnits
+                                                    : std::min(targetMs / msPerUnit_, kGrowth * maxUnits_),
+                                  interactive ? passUnits / kInteractiveSplits : INFINITY);
     // No small last submission: its fixed costs would come on top for little.
     const double budget = msPerUnit_ > 0 && passUnits - passDone <= kTail * sized ? INFINITY : sized;
     double units = 0;
     while (done < count && !rasterOnly) {
       const size_t i = visible[obj];
       const ObjectState& o = objects_[i];
-      const uint32_t gx = groups(o.pixels.width, kShadeGroup), gy = groups(o.pixels.height, kShadeGroup);
+      const uint32_t gx = gridX(o), gy = gridY(o);
       const uint32_t n = std::min(chunk, count - done);
       // Whole rows of workgroups while they fit, else part of one row (at least one workgroup
       // per submission).
@@ -856,7 +860,8 @@ Result<FrameStats> RenderViewImpl::passLocked(bool interruptible) {
         if (cols == 0) break;  // this submission is full
       }
       push.target[0] = static_cast<uint32_t>(i + 1);
-      push.target[3] = firstPass && done == 0 ? 1u : 0u;  // first pass: overwrite, not add (per pixel)
+      // First pass: overwrite, not add (per pixel); a preview (bit 1) overwrites too.
+      push.target[3] = preview ? 2u : firstPass && done == 0 ? 1u : 0u;
       push.frame[2] = static_cast<uint32_t>(stats_.spp + done);  // the sequence continues across passes
       push.frame[3] = n;
       vkCmdBindPipeline(cb, VK_PIPELINE_BIND_POINT_COMPUTE, o.kernel->kernel->pipeline());
@@ -877,7 +882,7 @@ Result<FrameStats> RenderViewImpl::passLocked(bool interruptible) {
       const uint32_t permutation = rows | (step << 16);  // rows and step are below 4096 / 8
       std::memcpy(&push.cameraPos[3], &permutation, sizeof permutation);
       // Dispatch origin; images are at most 4096 wide.
-      push.target[2] = (o.pixels.x + col * kShadeGroup) | ((o.pixels.y + row * kShadeGroup) << 16);
+      push.target[2] = (o.pixels.x + col * kShadeGroup * scale) | ((o.pixels.y + row * kShadeGroup * scale) << 16);
       vkCmdPushConstants(cb, layout, VK_SHADER_STAGE_COMPUTE_BIT, 0, sizeof(push), &push);
       vkCmdDispatch(cb, cols, rows, 1);
       units += taken;
@@ -902,7 +907,8 @@ Result<FrameStats> RenderViewImpl::passLocked(bool interruptible) {
       // Inside the objects' bounds a pixel may be background in this slice and covered in
       // another (an edge): its background samples are taken with the pass, so the pixel is the
       // average over its sub-pixel positions. With one slice nothing changes from pass to pass.
-      if (jitterCount_ > 1) recordBackground(cb, coverRect_, slice, count, firstPass);
+      // A preview leaves them to the first pass: it shows the background the restart wrote.
+      if (jitterCount_ > 1 && !preview) recordBackground(cb, coverRect_, slice, count, firstPass);
       BRDFA_TRY(endPhase(breakdown.edgeMs));
       if (refreshError && !r_->hostResolve()) {
         memoryBarrier(cb, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_ACCESS_SHADER_WRITE_BIT,
@@ -930,30 +936,44 @@ Result<FrameStats> RenderViewImpl::passLocked(bool interruptible) {
     // measures. Learned from it, the cost read ~1000x too high, and the view went on in
     // one-workgroup submissions, each waiting its turn behind every other view's (one of 30
     // sessions streaming stalled for a minute).
-    // A probe's reading is an upper bound only: its few units carry a whole submission's
-    // fixed costs (wake-ups, fence), so it reads several times too high, and falling from it
-    // by kCostDecay cost a slider's first pass a dozen submissions. The reading after it is
-    // taken as it is.
+    // A probe's few units carry a whole submission's fixed costs (wake-ups, fence): for a
+    // plain BRDF it reads ~20x too high, and falling from there by kCostDecay took a slider's
+    // pass a dozen submissions. After a change of parameters only, the estimate may fall at
+    // once as far as the cost before the change.
     if (units > 0 && warmUp_) {
       warmUp_ = false;
     } else if (units > 0 && (msPerUnit_ <= 0 || units >= 0.5 * sized || ms > targetMs)) {
-      msPerUnit_ = probed_ || msPerUnit_ <= 0 ? ms / units : std::max(ms / units, kCostDecay * msPerUnit_);
-      probed_ = units <= kProbeUnits && !probed_;
+      const double floor = priorMsPerUnit_ > 0 ? std::min(kCostDecay * msPerUnit_, priorMsPerUnit_)
+                                               : kCostDecay * msPerUnit_;
+      msPerUnit_ = std::max(ms / units, floor);
     }
     maxUnits_ = std::max(maxUnits_, units);
-    if (done < count && interruptible && interruptRequested_.exchange(false)) {
+    // A preview is not interrupted: it is short, and under changes coming faster than it
+    // (a camera dragged), interrupting it would leave nothing to show at all.
+    if (done < count && interruptible && !preview && interruptRequested_.exchange(false)) {
       // Interrupted (a scene change waits): keep the place; spp counts the pass once complete.
       const double ms = msSince(t0);
       partial_ = PartialPass{count, slice, chunk, done, row, col, obj, passDone,
-                             (resumed ? resumed->ms : 0.0) + ms, refreshError};
+                             (resumed ? resumed->ms : 0.0) + ms, refreshError, preview};
       stats_.elapsedMs += ms;
       sinceErrorMs_ += ms;
       return stats_;
     }
   } while (done < count);
 
+  priorMsPerUnit_ = 0;  // one pass to settle on the new cost
   const double segmentMs = msSince(t0);  // this call's part of the pass
   const double passMs = segmentMs + (resumed ? resumed->ms : 0.0);
+  if (preview) {  // counts in no statistic but the render time
+    previewPending_ = false;
+    stats_.preview = true;
+    stats_.elapsedMs += segmentMs;
+    stats_.lastPassMs = passMs;
+    stats_.submissions = submissions;
+    stats_.maxSubmissionMs = maxSubmissionMs;
+    return stats_;
+  }
+  stats_.preview = false;
   stats_.spp += count;
   stats_.passes += 1;
   stats_.elapsedMs += segmentMs;
@@ -990,8 +1010,9 @@ Result<Frame> RenderViewImpl::readFrame(bool linear) {
   if (partial_) BRDFA_TRY(passLocked(false));
   const bool host = r_->hostResolve();
   // Before the first pass of a restart the accumulators may still hold the previous scene's
-  // object pixels (a parameter change does not clear them): clear now.
-  if (stats_.passes == 0) clearPending_ = true;
+  // object pixels (a parameter change does not clear them): clear now. A preview has
+  // overwritten every object pixel.
+  if (stats_.passes == 0 && !stats_.preview) clearPending_ = true;
   if (!host || (slicesReady_ & 1u) == 0 || clearPending_) {
     auto begun = cmd_.begin();
     if (!begun) return begun.takeError();

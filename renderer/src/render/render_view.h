@@ -96,7 +96,7 @@ class RenderViewImpl final : public RenderView {
   Buffer edgeList_;
   // Texel views of gbuffer_'s planes per slice and of accum_ (declared after the buffers:
   // destroyed before them).
-  TexelView surfaceViews_[kMaxJitter], detailViews_[kMaxJitter], accumView_, edgeView_;
+  TexelView surfaceViews_[kMaxJitter], detailViews_[kMaxJitter], edgeView_;
   // edgeList_ holds the current geometry's edge pixels, edgeCount_ of them.
   bool edgeListKnown_ = false;
   uint32_t edgeCount_ = 0;
@@ -115,7 +115,7 @@ class RenderViewImpl final : public RenderView {
   double msPerUnit_ = 0;
   double maxUnits_ = 0;
   bool warmUp_ = true;  // the next shading submission is a warm-up (see renderPass)
-  bool probed_ = false;  // msPerUnit_ was read from a probe (see renderPass)
+  double priorMsPerUnit_ = 0;  // msPerUnit_ before a change of parameters only (see renderPass)
   bool coverageKnown_ = false;  // ObjectState::cover is measured for the current geometry
   double sinceErrorMs_ = 0;  // pass time since rel_error was last refreshed
   FrameStats stats_;
@@ -128,7 +128,9 @@ class RenderViewImpl final : public RenderView {
     double passDone = 0;                        // cost units shaded so far
     double ms = 0;                              // wall time spent on it so far
     bool refreshError = false;
+    bool preview = false;                       // of a preview pass
   };
+  bool previewPending_ = false;  // the next pass is a preview (RenderSettings::previewPass)
   std::optional<PartialPass> partial_;
   std::atomic<bool> interruptRequested_{false};
 };

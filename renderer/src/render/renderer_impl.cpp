@@ -178,13 +178,13 @@ Result<void> RendererImpl::createLayouts() {
   VkDevice d = ctx_->device();
   // Set 0: one view's G-buffer, accumulators, counters, environment and outputs
   // (bindings as in shaders/lib/bindings.glsl).
-  const std::array<std::pair<uint32_t, VkDescriptorType>, 12> viewBindings = {{
+  const std::array<std::pair<uint32_t, VkDescriptorType>, 11> viewBindings = {{
       {0, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER},         {3, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER},
       {4, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER},         {5, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER},
       {6, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER},         {7, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER},
       {8, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER},         {9, VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER},
       {10, VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER},  {11, VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER},
-      {12, VK_DESCRIPTOR_TYPE_STORAGE_TEXEL_BUFFER},  {13, VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER}}};
+      {13, VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER}}};
   std::array<VkDescriptorSetLayoutBinding, viewBindings.size()> view{};
   for (size_t i = 0; i < view.size(); ++i)
     view[i] = {viewBindings[i].first, viewBindings[i].second, 1, VK_SHADER_STAGE_COMPUTE_BIT, nullptr};

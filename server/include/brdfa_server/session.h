@@ -31,6 +31,7 @@ struct StreamFrame {
   std::shared_ptr<const std::vector<uint8_t>> png;  // may be a half-size preview (Session::kPreviewBelowSpp)
   uint64_t seq = 0;
   uint64_t spp = 0;
+  uint64_t sceneVersion = 0;  // FrameStats::sceneVersion of the image
 };
 
 class Session {
@@ -108,9 +109,10 @@ class Session {
   void addStreamClient();
   void removeStreamClient();
   int streamClients() const;
-  // The latest published frame when its seq is greater than `afterSeq`; waits up to `timeout`
-  // for one. nullopt on timeout or stop.
-  std::optional<StreamFrame> waitForStreamFrame(uint64_t afterSeq, std::chrono::milliseconds timeout);
+  // The latest published frame when its seq is greater than `afterSeq` and it shows scene
+  // version `minSceneVersion` or later; waits up to `timeout` for one. nullopt on timeout or stop.
+  std::optional<StreamFrame> waitForStreamFrame(uint64_t afterSeq, std::chrono::milliseconds timeout,
+                                                uint64_t minSceneVersion = 0);
   std::optional<StreamFrame> latestStreamFrame() const;
 
   // Stops the render thread and wakes every waiter; idempotent. Streams end on their next wake.
@@ -126,14 +128,17 @@ class Session {
   // it to the view. /frame always answers full size.
   static constexpr uint64_t kPreviewBelowSpp = 4;
   static constexpr int kPreviewMinPixels = 256 * 256;
-  // tEXt keyword of each stream PNG that holds its samples per pixel.
+  // tEXt keywords of each stream PNG: its samples per pixel (0 for a preview,
+  // RenderSettings::previewPass) and the scene_version it shows (as in the stats).
   static constexpr const char* kSamplesPngKeyword = "brdfa:spp";
+  static constexpr const char* kScenePngKeyword = "brdfa:scene_version";
 
  private:
   void renderLoop();
   void encodeLoop();
   void guarded(void (Session::*loop)());
   bool watchedLocked(Clock::time_point now) const;
+  bool hasImageLocked() const;  // a pass or a preview of the scene in place is there to show
   void publishFrame(std::unique_lock<std::mutex>& lock);
   // Takes the stats of a pass or a frame read of the scene in place (older scenes' are dropped)
   // and feeds the convergence series. Under mutex_.
