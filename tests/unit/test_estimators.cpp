@@ -152,6 +152,64 @@ TEST_F(Estimators, HalfWhiteSkyMatchesItsAnalyticValueUnderEveryMode) {
   }
 }
 
+// The G-buffer keeps normals in the octahedral map (lib/gbuffer_encoding.glsl), whose lower
+// hemisphere (n.z < 0) is folded over the diagonals; a sphere seen from +z shows only normals
+// with n.z > 0. Seen from -z, from near each axis and from an arbitrary side, a white
+// Lambertian sphere in the half-white sky is (1 + n_y) / 2 at every pixel, with n where the
+// pixel's ray meets the unit sphere: checked over blocks of 8 x 8 pixels, so a wrong unfolding
+// anywhere (an error in n of order 1) shows.
+TEST_F(Estimators, SphereSeenFromEverySideShowsItsNormalsInTheHalfWhiteSky) {
+  struct Side {
+    const char* name;
+    float yaw, pitch;  // the camera looks along this, from 3 units away, at the sphere
+  };
+  const Side sides[] = {{"+z", 0, 0},        {"-z", 180, 0},      {"near -z", 179.9f, 0.05f}, {"+x", 90, 0},
+                        {"-x", -90, 0},      {"above", 0, -89},   {"below", 180, 89},         {"arbitrary", 137, -23},
+                        {"near +z", 0.05f, 0.1f}};
+  constexpr int kSize = 64, kBlock = 8;
+  for (const Side& side : sides) {
+    Scene s = sphereScene(builtin("lambert"), "half_white", kSize);
+    s.objects[0].params["Kd"] = {1, 1, 1};
+    s.render.sampling = SamplingMode::Cosine;
+    s.camera.yaw = side.yaw;
+    s.camera.pitch = side.pitch;
+    s.camera.position = {0, 0, 0};
+    const glm::vec3 look = cameraFrame(s.camera, kSize, kSize).forward;
+    s.camera.position = {-3 * look.x, -3 * look.y, -3 * look.z};
+    const CameraFrame cam = cameraFrame(s.camera, kSize, kSize);
+    auto view = newView(s);
+    Frame f = renderTo(*view, s, 512);
+    ASSERT_EQ(f.width, kSize);
+    // Per block: the sums of the rendered and true values over interior pixels (rays passing
+    // well inside the silhouette, clear of the tessellation's edge and the anti-aliasing).
+    std::vector<double> got(kSize * kSize / (kBlock * kBlock)), want(got.size()), count(got.size());
+    for (int y = 0; y < kSize; ++y)
+      for (int x = 0; x < kSize; ++x) {
+        const glm::dvec2 ndc(2.0 * (x + 0.5) / kSize - 1.0, 1.0 - 2.0 * (y + 0.5) / kSize);
+        const glm::dvec3 dir = glm::normalize(glm::dvec3(cam.forward) + ndc.x * cam.tanHalfFov * cam.aspect * glm::dvec3(cam.right) +
+                                              ndc.y * cam.tanHalfFov * glm::dvec3(cam.up));
+        const glm::dvec3 origin(cam.position);
+        const double b = glm::dot(origin, dir), c = glm::dot(origin, origin) - 1.0, disc = b * b - c;
+        if (disc < 0.2) continue;  // outside, or within ~0.1 of the silhouette
+        const glm::dvec3 n = origin + (-b - std::sqrt(disc)) * dir;
+        const size_t block = size_t(y / kBlock) * (kSize / kBlock) + x / kBlock;
+        got[block] += f.rgba32f[4 * (y * kSize + x)];
+        want[block] += (1.0 + n.y) / 2.0;
+        count[block] += 1;
+      }
+    double blocks = 0, worst = 0;
+    for (size_t b = 0; b < got.size(); ++b) {
+      if (count[b] < 16) continue;
+      ++blocks;
+      worst = std::max(worst, std::abs(got[b] - want[b]) / count[b]);
+    }
+    EXPECT_GE(blocks, 20) << side.name;
+    // 512 cosine samples of a 0/1 sky: at most 0.022 of noise per pixel, 0.0055 per block of
+    // 16 or more pixels; 0.03 is over 5 of those.
+    EXPECT_LT(worst, 0.03) << "seen from " << side.name;
+  }
+}
+
 TEST_F(Estimators, FurnaceStaysExactWithCosineAndMisIsTheBrdfSideThere) {
   Scene s = sphereScene(builtin("lambert"), "furnace", 48);
   s.objects[0].params["Kd"] = {1, 1, 1};
