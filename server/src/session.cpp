@@ -94,7 +94,7 @@ Result<void> Session::applyScene(std::unique_lock<std::mutex>& updateLock, const
     return makeError(ErrorCode::Internal, "applyScene called without the scene update lock");
   // Called outside mutex_: setScene may compile for a while and must not stall stats or
   // streams. The view serializes it against the render thread's passes; the pass in progress
-  // is asked to stop at its next submission, so the change waits for that, not the whole pass
+  // is asked to stop at its next submission, so the change waits for that, not the whole pass.
   // Sessions are interactive: the first frame after a change comes from a quarter-cost preview.
   Scene interactive = scene;
   interactive.render.previewPass = true;
@@ -183,7 +183,9 @@ std::optional<Error> Session::renderError() const {
   return renderError_;
 }
 
-bool Session::hasImageLocked() const { return stats_.spp > 0 || stats_.preview; }
+bool Session::hasImage(const FrameStats& stats) { return stats.spp > 0 || stats.preview; }
+
+bool Session::hasImageLocked() const { return hasImage(stats_); }
 
 bool Session::watchedLocked(Clock::time_point now) const {
   return streamClients_ > 0 || waiters_ > 0 || now < watchedUntil_;
@@ -293,7 +295,7 @@ void Session::publishFrame(std::unique_lock<std::mutex>& lock) {
   if (f.width <= 0 || f.height <= 0 || f.rgba8.size() < static_cast<size_t>(f.width) * f.height * 4) return;
   // A scene applied between the pass and this read: nothing of it to show yet (its objects
   // would be black). Its preview comes next.
-  if (f.stats.spp == 0 && !f.stats.preview) return;
+  if (!hasImage(f.stats)) return;
   pendingRaw_ = RawFrame{std::move(f.rgba8), f.width, f.height, f.stats.spp, f.stats.sceneVersion, f.stats.done()};
   encodeWake_.notify_one();
 }

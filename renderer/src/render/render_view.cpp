@@ -129,8 +129,9 @@ Result<void> RenderViewImpl::resize(uint32_t width, uint32_t height) {
   const VkDeviceSize align = std::max<VkDeviceSize>({ctx.limits().minStorageBufferOffsetAlignment,
                                                      ctx.limits().minTexelBufferOffsetAlignment, 16});
   auto aligned = [&](VkDeviceSize n) { return (n + align - 1) / align * align; };
-  // Texel views address at most maxTexelBufferElements texels (2^27 on lavapipe, more on GPUs);
-  // the accumulators' two halves are the largest view.
+  // Texel views address at most maxTexelBufferElements texels (2^27 on lavapipe, more on GPUs).
+  // The largest views now hold one texel per pixel (a G-buffer plane, the edge list); the bound
+  // stays at the accumulators' two halves, from when they were a texel view too.
   if (2 * pixels > ctx.limits().maxTexelBufferElements)
     return makeError(ErrorCode::InvalidArgument, "a " + std::to_string(width) + "x" + std::to_string(height) +
                                                      " view is more than this device's texel buffers can address");
@@ -730,7 +731,7 @@ Result<FrameStats> RenderViewImpl::passLocked(bool interruptible) {
   const uint64_t ramp = stats_.passes < 20 ? (uint64_t(1) << stats_.passes) : UINT64_MAX;
   // A preview (RenderSettings::previewPass) shades one sample at one pixel of each 2x2
   // block, over workgroups of 16x16 pixels: `scale` 2.
-  const bool preview = resumed ? resumed->preview : previewPending_;
+  const bool preview = previewPending_;
   const uint32_t scale = preview ? 2 : 1;
   const uint32_t count = preview ? 1
                          : resumed ? resumed->count
@@ -954,7 +955,7 @@ Result<FrameStats> RenderViewImpl::passLocked(bool interruptible) {
       // Interrupted (a scene change waits): keep the place; spp counts the pass once complete.
       const double ms = msSince(t0);
       partial_ = PartialPass{count, slice, chunk, done, row, col, obj, passDone,
-                             (resumed ? resumed->ms : 0.0) + ms, refreshError, preview};
+                             (resumed ? resumed->ms : 0.0) + ms, refreshError};
       stats_.elapsedMs += ms;
       sinceErrorMs_ += ms;
       return stats_;

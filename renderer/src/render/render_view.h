@@ -120,7 +120,8 @@ class RenderViewImpl final : public RenderView {
   double sinceErrorMs_ = 0;  // pass time since rel_error was last refreshed
   FrameStats stats_;
   // A pass interrupted between two submissions (interruptPass): where its sweep stood, so the
-  // next pass completes it with the same samples. A restart drops it.
+  // next pass completes it with the same samples. A restart drops it. Never a preview, which
+  // is not interrupted (and a restart is what makes one pending).
   struct PartialPass {
     uint32_t count = 0, slice = 0, chunk = 0;  // the pass's samples, G-buffer slice, samples per sweep
     uint32_t done = 0, row = 0, col = 0;       // samples swept, workgroup row and column in the object
@@ -128,7 +129,6 @@ class RenderViewImpl final : public RenderView {
     double passDone = 0;                        // cost units shaded so far
     double ms = 0;                              // wall time spent on it so far
     bool refreshError = false;
-    bool preview = false;                       // of a preview pass
   };
   bool previewPending_ = false;  // the next pass is a preview (RenderSettings::previewPass)
   std::optional<PartialPass> partial_;

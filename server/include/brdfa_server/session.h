@@ -138,7 +138,8 @@ class Session {
   void encodeLoop();
   void guarded(void (Session::*loop)());
   bool watchedLocked(Clock::time_point now) const;
-  bool hasImageLocked() const;  // a pass or a preview of the scene in place is there to show
+  static bool hasImage(const FrameStats& stats);  // a pass or a preview is there to show
+  bool hasImageLocked() const;                     // hasImage(stats_)
   void publishFrame(std::unique_lock<std::mutex>& lock);
   // Takes the stats of a pass or a frame read of the scene in place (older scenes' are dropped)
   // and feeds the convergence series. Under mutex_.
