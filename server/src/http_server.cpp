@@ -37,6 +37,14 @@ Result<std::unique_ptr<HttpServer>> HttpServer::create(const ServerConfig& confi
   out->http_ = std::make_unique<GuardedServer>(limits);
   out->service_->connections = &out->http_->connections();
   httplib::Server& http = *out->http_;
+  // cpp-httplib's default sets SO_REUSEPORT, with which a second server binds a port already
+  // served and the kernel spreads connections over both: a user starting the service twice
+  // got half the requests answered by each (a BRDF PUT to one, 404 from the other).
+  // SO_REUSEADDR alone still rebinds a port left in TIME_WAIT and refuses one in use.
+  http.set_socket_options([](socket_t sock) {
+    int yes = 1;
+    ::setsockopt(sock, SOL_SOCKET, SO_REUSEADDR, &yes, sizeof(yes));
+  });
 
   // Uploads need more than a JSON body; the JSON and .brdf routes check their own, smaller
   // limits (readJsonBody, readBrdfTextBody), the upload route its file limit.

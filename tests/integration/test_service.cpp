@@ -5,6 +5,7 @@
 #include <unistd.h>
 
 #include <atomic>
+#include <filesystem>
 #include <fstream>
 #include <iterator>
 #include <thread>
@@ -177,6 +178,41 @@ TEST(Lifecycle, HelpAndBadFlags) {
   EXPECT_EQ(run({"--port", "70000"}), 2);
   EXPECT_EQ(run({"--frobnicate"}), 2);
   EXPECT_EQ(run({"--threads"}), 2);
+}
+
+TEST(Lifecycle, ASecondServerOnAPortInUseExitsInsteadOfSharingIt) {
+  // With SO_REUSEPORT (cpp-httplib's default) the second bind succeeded and the kernel spread
+  // connections over both servers: a BRDF PUT to one was then unknown to the other.
+  ServerProcess first;
+  ASSERT_EQ(first.start(), "");
+  const std::string port = std::to_string(first.port());
+  char dataDir[] = "/tmp/brdfa-second-XXXXXX";
+  ASSERT_NE(::mkdtemp(dataDir), nullptr);
+  pid_t pid = fork();
+  if (pid == 0) {
+    int devnull = ::open("/dev/null", O_WRONLY);
+    ::dup2(devnull, STDOUT_FILENO);
+    ::dup2(devnull, STDERR_FILENO);
+    ::execl(BRDFA_SERVER_BINARY, BRDFA_SERVER_BINARY, "--port", port.c_str(), "--root", BRDFA_SOURCE_DIR,
+            "--data-dir", dataDir, static_cast<char*>(nullptr));
+    ::_exit(127);
+  }
+  int status = 0;
+  bool exited = false;
+  for (auto deadline = Clock::now() + std::chrono::seconds(60); !exited && Clock::now() < deadline;) {
+    exited = ::waitpid(pid, &status, WNOHANG) == pid;
+    if (!exited) std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  }
+  if (!exited) {
+    ::kill(pid, SIGKILL);
+    ::waitpid(pid, &status, 0);
+  }
+  std::filesystem::remove_all(dataDir);
+  ASSERT_TRUE(exited) << "a second server on port " << port << " kept running";
+  EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 1) << "status " << status;
+  auto health = first.client()->Get("/api/health");
+  ASSERT_TRUE(health);
+  EXPECT_EQ(health->status, 200);
 }
 
 TEST(Lifecycle, SigtermWithOpenStreamAndWaiterExitsCleanly) {
