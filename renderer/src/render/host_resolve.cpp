@@ -4,6 +4,8 @@
 #include <array>
 #include <cmath>
 #include <cstring>
+#include <system_error>
+#include <thread>
 
 namespace brdfa {
 
@@ -61,10 +63,11 @@ float toneAces(float e) {
 
 // The per-pixel loop, specialised per tone map so the choice is made once per frame.
 template <float (*Tone)(float)>
-void resolvePixels(const HostResolveInput& in, uint8_t* rgba8, float* rgba32f, ErrorSums& sums) {
+void resolvePixels(const HostResolveInput& in, size_t begin, size_t end, uint8_t* rgba8, float* rgba32f,
+                   ErrorSums& sums) {
   const float* a = in.accum;
   const float* b = in.accum + 4 * in.pixels;
-  for (size_t i = 0; i < in.pixels; ++i) {
+  for (size_t i = begin; i < end; ++i) {
     const float* pa = a + 4 * i;
     const float* pb = b + 4 * i;
     const float n = pa[3] + pb[3];
@@ -121,12 +124,33 @@ uint8_t linearToSrgb8(float x) {
 }
 
 ErrorSums resolveOnHost(const HostResolveInput& in, uint8_t* rgba8, float* rgba32f) {
-  ErrorSums sums;
-  switch (in.toneMap) {
-    case ToneMap::Reinhard: resolvePixels<toneReinhard>(in, rgba8, rgba32f, sums); break;
-    case ToneMap::Aces: resolvePixels<toneAces>(in, rgba8, rgba32f, sums); break;
-    case ToneMap::Clamp: resolvePixels<toneClamp>(in, rgba8, rgba32f, sums); break;
+  auto range = [&](size_t begin, size_t end) {
+    ErrorSums sums;
+    switch (in.toneMap) {
+      case ToneMap::Reinhard: resolvePixels<toneReinhard>(in, begin, end, rgba8, rgba32f, sums); break;
+      case ToneMap::Aces: resolvePixels<toneAces>(in, begin, end, rgba8, rgba32f, sums); break;
+      case ToneMap::Clamp: resolvePixels<toneClamp>(in, begin, end, rgba8, rgba32f, sums); break;
+    }
+    return sums;
+  };
+  // Two halves on two threads: the device is idle while a frame is read (the read happens
+  // between passes), and a stream frame waits for it (512^2: 9 ms on one core of a 2-core VM).
+  // Below kSplitPixels a thread's start costs more than it saves.
+  constexpr size_t kSplitPixels = 1u << 16;
+  if (in.pixels < kSplitPixels) return range(0, in.pixels);
+  const size_t half = in.pixels / 2;
+  ErrorSums second;
+  std::thread helper;
+  try {
+    helper = std::thread([&] { second = range(half, in.pixels); });
+  } catch (const std::system_error&) {  // no thread to be had (a process at its limit): one core
+    return range(0, in.pixels);
   }
+  ErrorSums sums = range(0, half);
+  helper.join();
+  sums.variance += second.variance;
+  sums.luminance += second.luminance;
+  sums.pixels += second.pixels;
   return sums;
 }
 
