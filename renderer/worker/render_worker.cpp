@@ -247,7 +247,8 @@ class Worker {
     } else if (op == "renderPass") {
       auto v = view(head);
       if (!v) return noView();
-      reply(id, map(v->renderPass(), [](auto& s) { return wire::toJson(s); }));
+      const double frameTargetMs = head.value("frame_target_ms", 0.0);
+      reply(id, map(v->renderPass(frameTargetMs), [](auto& s) { return wire::toJson(s); }));
     } else if (op == "interruptPass") {
       if (auto v = view(head)) v->interruptPass();
       reply(id, json());

@@ -284,8 +284,11 @@ void Session::publishFrame(std::unique_lock<std::mutex>& lock) {
   publishRequested_ = false;
   lastPublish_ = Clock::now();
   lock.unlock();
+  const auto readStart = Clock::now();
   Result<Frame> frame = view_->readFrame(false);
+  const double readMs = std::chrono::duration<double, std::milli>(Clock::now() - readStart).count();
   lock.lock();
+  readMs_ = readMs_ > 0 ? 0.8 * readMs_ + 0.2 * readMs : readMs;
   if (!frame) {
     std::fprintf(stderr, "session %s: readFrame for stream failed: %s\n", id_.c_str(), frame.error().message.c_str());
     return;
@@ -354,8 +357,11 @@ void Session::renderLoop() {
       const uint64_t sppBefore = stats_.spp, passesBefore = stats_.passes;
       const bool previewBefore = stats_.preview;
       const uint64_t pixels = uint64_t(std::max(render_.width, 0)) * uint64_t(std::max(render_.height, 0));
+      // The pass, the read and the loop's own work (~2 ms) within one stream frame interval;
+      // never below 5 ms, however slow the reads.
+      const double frameTargetMs = streamClients_ > 0 ? std::max(kStreamFrameMs - readMs_ - 2.0, 5.0) : 0.0;
       lock.unlock();
-      Result<FrameStats> pass = view_->renderPass();
+      Result<FrameStats> pass = view_->renderPass(frameTargetMs);
       lock.lock();
       if (!pass) {
         // Only an error of the scene still in place counts; a newer scene gets a fresh try.

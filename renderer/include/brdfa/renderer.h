@@ -163,7 +163,12 @@ class RenderView {
   // Renders one progressive pass of render.samples_per_frame samples per pixel: fewer in the
   // first passes after a restart (1, 2, 4, ...) and when max_samples is near. Does nothing once
   // done() (converged to render.target_error, or max_samples reached).
-  virtual Result<FrameStats> renderPass() = 0;
+  // With frameTargetMs > 0 (a stream shows every pass), fewer again when the passes measured
+  // since the last restart predict that the pass would take longer than that: the most
+  // samples that fit, at least 1 (more passes of fewer samples: a higher frame rate for a
+  // little less throughput, each pass's fixed costs being paid more often).
+  virtual Result<FrameStats> renderPass(double frameTargetMs) = 0;
+  Result<FrameStats> renderPass() { return renderPass(0.0); }
 
   virtual FrameStats stats() const = 0;
 

@@ -121,7 +121,8 @@ class RemoteView : public RenderView {
   RemoteView(std::shared_ptr<RemoteRenderer> renderer, uint64_t id) : r_(std::move(renderer)), id_(id) {}
   ~RemoteView() override;
   Result<void> setScene(const Scene& scene) override;
-  Result<FrameStats> renderPass() override;
+  using RenderView::renderPass;
+  Result<FrameStats> renderPass(double frameTargetMs) override;
   FrameStats stats() const override {
     std::lock_guard lock(mutex_);
     return stats_;
@@ -739,11 +740,11 @@ Result<void> RemoteView::setScene(const Scene& scene) {
   return {};
 }
 
-Result<FrameStats> RemoteView::renderPass() {
+Result<FrameStats> RemoteView::renderPass(double frameTargetMs) {
   std::lock_guard lock(mutex_);
   if (Result<void> ready = ensureRemote(); !ready) return ready.takeError();
   if (failed_) return *failed_;
-  auto m = viewCall(json{{"op", "renderPass"}}, Budget::Pass, programs_);
+  auto m = viewCall(json{{"op", "renderPass"}, {"frame_target_ms", frameTargetMs}}, Budget::Pass, programs_);
   if (!m) {
     if (m.error().code == ErrorCode::RenderBudget) failed_ = m.error();
     return m.takeError();

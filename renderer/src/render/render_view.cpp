@@ -449,6 +449,7 @@ Result<void> RenderViewImpl::setScene(const Scene& scene) {
   }
   if (restart) {
     partial_.reset();  // its samples are of the old image
+    sizer_.reset();    // the costs of what is drawn now are unmeasured
     previewPending_ = scene.render.previewPass && uint64_t(width) * height >= RenderSettings::kPreviewMinPixels;
     const uint64_t version = stats_.sceneVersion;
     stats_ = FrameStats{};
@@ -706,13 +707,13 @@ void RenderViewImpl::listEdgePixels() {
 // are split too: the pass sweeps the objects several times, each sweep taking the next samples
 // of the sequence (frame[2] advanced), so a pass still adds `count` samples to every pixel and
 // the result differs from the unsplit pass only in the order of float additions.
-Result<FrameStats> RenderViewImpl::renderPass() {
+Result<FrameStats> RenderViewImpl::renderPass(double frameTargetMs) {
   std::lock_guard<std::mutex> lock(mutex_);
   if (!hasScene_) return makeError(ErrorCode::InvalidArgument, "no scene has been set");
-  return passLocked(true);
+  return passLocked(true, frameTargetMs);
 }
 
-Result<FrameStats> RenderViewImpl::passLocked(bool interruptible) {
+Result<FrameStats> RenderViewImpl::passLocked(bool interruptible, double frameTargetMs) {
   const uint64_t maxSamples = static_cast<uint64_t>(scene_.render.maxSamples);
   updateDone();
   if (stats_.done()) {
@@ -733,10 +734,11 @@ Result<FrameStats> RenderViewImpl::passLocked(bool interruptible) {
   // block, over workgroups of 16x16 pixels: `scale` 2.
   const bool preview = previewPending_;
   const uint32_t scale = preview ? 2 : 1;
-  const uint32_t count = preview ? 1
-                         : resumed ? resumed->count
-                                   : static_cast<uint32_t>(std::min<uint64_t>(
-                                         {static_cast<uint64_t>(scene_.render.samplesPerFrame), ramp, maxSamples - stats_.spp}));
+  uint32_t count = preview ? 1
+                   : resumed ? resumed->count
+                             : static_cast<uint32_t>(std::min<uint64_t>(
+                                   {static_cast<uint64_t>(scene_.render.samplesPerFrame), ramp, maxSamples - stats_.spp}));
+  if (frameTargetMs > 0 && !preview && !resumed) count = sizer_.fit(frameTargetMs, count);
   const uint32_t slice = resumed ? resumed->slice : sliceForPass(stats_.passes);
   const bool firstPass = stats_.passes == 0;
   // Refresh the error estimate in the last submission when it is due (and a second half exists).
@@ -975,6 +977,7 @@ Result<FrameStats> RenderViewImpl::passLocked(bool interruptible) {
     return stats_;
   }
   stats_.preview = false;
+  sizer_.record(count, passMs);
   stats_.spp += count;
   stats_.passes += 1;
   stats_.elapsedMs += segmentMs;

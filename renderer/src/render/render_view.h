@@ -10,6 +10,7 @@
 #include "brdfa/renderer.h"
 #include "gpu_assets.h"
 #include "host_resolve.h"
+#include "pass_sizer.h"
 #include "scene_math.h"
 #include "renderer_impl.h"
 
@@ -23,7 +24,8 @@ class RenderViewImpl final : public RenderView {
   Result<void> init();
 
   Result<void> setScene(const Scene& scene) override;
-  Result<FrameStats> renderPass() override;
+  using RenderView::renderPass;
+  Result<FrameStats> renderPass(double frameTargetMs) override;
   FrameStats stats() const override;
   Result<Frame> readFrame(bool linear) override;
   void interruptPass() override;
@@ -44,7 +46,8 @@ class RenderViewImpl final : public RenderView {
   };
 
   // The pass of renderPass, under mutex_; an `interruptible` one ends early on interruptPass().
-  Result<FrameStats> passLocked(bool interruptible);
+  // frameTargetMs as in renderPass (0: none).
+  Result<FrameStats> passLocked(bool interruptible, double frameTargetMs = 0);
   Result<void> resize(uint32_t width, uint32_t height);
   void writeViewDescriptors();
   Result<std::vector<ObjectState>> buildObjects(const Scene& scene);
@@ -118,6 +121,7 @@ class RenderViewImpl final : public RenderView {
   double priorMsPerUnit_ = 0;  // msPerUnit_ before a change of parameters only (see renderPass)
   bool coverageKnown_ = false;  // ObjectState::cover is measured for the current geometry
   double sinceErrorMs_ = 0;  // pass time since rel_error was last refreshed
+  PassSizer sizer_;  // what passes of each size took since the last restart (renderPass's frame target)
   FrameStats stats_;
   // A pass interrupted between two submissions (interruptPass): where its sweep stood, so the
   // next pass completes it with the same samples. A restart drops it. Never a preview, which

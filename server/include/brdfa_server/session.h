@@ -121,6 +121,10 @@ class Session {
 
   // Minimum interval between published stream frames (about 30 per second).
   static constexpr std::chrono::milliseconds kPublishInterval{33};
+  // The frame interval a streamed session aims at (20 frames/s, DESIGN.md section 5): while a
+  // stream client watches, each pass is sized to it less the time a frame's read takes
+  // (RenderView::renderPass's frame target). Unwatched, passes keep samples_per_frame.
+  static constexpr double kStreamFrameMs = 50.0;
   // Stream frames with fewer samples than this (the first passes after a change: 1, then 3)
   // are sent at half resolution when the frame has at least kPreviewMinPixels and is not the
   // final (done) one: they are mostly noise, and the full-size PNG of noise is what costs the most
@@ -180,6 +184,7 @@ class Session {
   int streamClients_ = 0;
   bool publishRequested_ = false;
   Clock::time_point lastPublish_{};
+  double readMs_ = 0;  // running mean of a stream frame's read (publishFrame), ms
   StreamFrame latest_;
   // A frame read back for the stream, waiting for the encoder thread. Only the newest is kept:
   // when encoding falls behind, older frames are dropped rather than queued.

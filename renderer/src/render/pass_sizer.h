@@ -1,0 +1,40 @@
+// Picks a progressive pass's samples per pixel from a frame-time target (RenderView::
+// renderPass(frameTargetMs)): a stream frame follows each pass, and a pass of
+// samples_per_frame samples can take longer than the frame interval the stream aims at.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <vector>
+
+namespace brdfa {
+
+class PassSizer {
+ public:
+  // Forgets what passes cost (a restart: the camera, the programs or the parameters changed).
+  void reset() { points_.clear(); }
+
+  // A complete pass of `samples` samples per pixel took `ms` (device and host, as the caller
+  // waited for it). Kept as a running mean per sample count, newer passes weighing more.
+  void record(uint32_t samples, double ms);
+
+  // The predicted time of a pass of `samples`: its running mean when measured, else the line
+  // through the measured counts (a fixed part plus a part per sample), else proportional to
+  // the one count measured. Negative when nothing is measured.
+  double predict(uint32_t samples) const;
+
+  // The most samples in [1, cap] whose predicted time is at most targetMs; `cap` when nothing
+  // is measured yet, 1 when even one sample is predicted over the target. A wrong guess is
+  // measured and corrected by the next choice.
+  uint32_t fit(double targetMs, uint32_t cap) const;
+
+ private:
+  struct Point {
+    uint32_t samples;
+    double ms;
+  };
+  std::vector<Point> points_;  // at most kMaxPoints counts, the most recent last
+  static constexpr size_t kMaxPoints = 8;
+};
+
+}  // namespace brdfa

@@ -1,0 +1,117 @@
+// A pass's samples picked from a frame-time target (PassSizer, RenderView::renderPass's
+// frameTargetMs): predictions from the passes measured, and the view's passes under a target.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <limits>
+#include <vector>
+
+#include "brdfa/renderer.h"
+#include "device_test.h"
+#include "pass_sizer.h"
+
+namespace brdfa {
+namespace {
+
+TEST(PassSizer, NothingMeasuredKeepsTheCap) {
+  PassSizer s;
+  EXPECT_LT(s.predict(4), 0.0);
+  EXPECT_EQ(s.fit(1.0, 8), 8u);
+  EXPECT_EQ(s.fit(1.0, 0), 1u);
+}
+
+// Passes of a fixed 19 ms plus 10 ms a sample (GGX, mis, 512^2 on the 2-core VM): the line
+// through two measured counts predicts the others exactly.
+TEST(PassSizer, TheLineThroughTwoCountsPicksTheLargestPassThatFits) {
+  PassSizer s;
+  s.record(1, 29);
+  s.record(2, 39);
+  EXPECT_NEAR(s.predict(4), 59, 1e-9);
+  EXPECT_NEAR(s.predict(16), 179, 1e-9);
+  EXPECT_EQ(s.fit(45, 4), 2u);
+  EXPECT_EQ(s.fit(49, 8), 3u);
+  EXPECT_EQ(s.fit(59, 4), 4u);
+  EXPECT_EQ(s.fit(1000, 4), 4u);  // never above the cap
+  EXPECT_EQ(s.fit(10, 4), 1u);    // at least one sample
+}
+
+TEST(PassSizer, OneCountIsScaledInProportion) {
+  PassSizer s;
+  s.record(4, 60);
+  EXPECT_NEAR(s.predict(2), 30, 1e-9);
+  EXPECT_NEAR(s.predict(8), 120, 1e-9);  // over the truth when part of the 60 is fixed: growth with care
+  EXPECT_EQ(s.fit(45, 4), 3u);
+}
+
+// Noise can make more samples read cheaper (a pass measured under load): the line would
+// predict less for more; the nearest measured count is scaled instead.
+TEST(PassSizer, ATiltedLineFallsBackToTheNearestCount) {
+  PassSizer s;
+  s.record(1, 40);
+  s.record(2, 30);
+  EXPECT_NEAR(s.predict(3), 45, 1e-9);
+  EXPECT_NEAR(s.predict(4), 60, 1e-9);
+  EXPECT_EQ(s.fit(44, 4), 2u);
+}
+
+TEST(PassSizer, RepeatedCountsFollowTheNewerTimesAndNonsenseIsIgnored) {
+  PassSizer s;
+  s.record(2, 40);
+  s.record(2, 20);
+  EXPECT_NEAR(s.predict(2), 30, 1e-9);
+  s.record(2, std::numeric_limits<double>::quiet_NaN());
+  s.record(2, -5);
+  s.record(0, 10);
+  EXPECT_NEAR(s.predict(2), 30, 1e-9);
+  s.reset();
+  EXPECT_LT(s.predict(2), 0.0);
+}
+
+// Through a real view: under a frame target no pass can meet, every pass after the first
+// takes one sample (the first measures); without one, passes ramp 1, 2, 4, 8, 8. The white
+// Lambertian in the furnace is 1 either way.
+TEST(PassSizer, AViewUnderAFrameTargetTakesPassesThatFitIt) {
+  RendererOptions options;
+  options.shaderDir = std::string(BRDFA_SOURCE_DIR) + "/shaders";
+  auto renderer = Renderer::create(options);
+  ASSERT_TRUE(renderer.ok());
+  Scene scene;
+  scene.environment.name = "furnace";
+  scene.environment.visible = false;
+  scene.render.width = scene.render.height = 64;
+  scene.render.samplesPerFrame = 8;
+  scene.render.maxSamples = 23;
+  scene.render.sampling = SamplingMode::Cosine;
+  SceneObject o;
+  o.brdf = inlineBrdf(kWhiteLambert);
+  scene.objects.push_back(o);
+  for (double targetMs : {0.0, 1e-3, 1e9}) {
+    SCOPED_TRACE(targetMs);
+    auto view = (*renderer)->createView();
+    ASSERT_TRUE(view.ok());
+    ASSERT_TRUE((*view)->setScene(scene).ok());
+    std::vector<uint64_t> spp;
+    while (spp.size() < 100) {
+      auto pass = (*view)->renderPass(targetMs);
+      ASSERT_TRUE(pass.ok()) << pass.error().message;
+      spp.push_back(pass->spp);
+      if (pass->done()) break;
+    }
+    const std::vector<uint64_t> ramp = {1, 3, 7, 15, 23};
+    if (targetMs == 1e-3) {
+      ASSERT_EQ(spp.size(), 23u);
+      for (size_t i = 0; i < spp.size(); ++i) EXPECT_EQ(spp[i], i + 1);
+    } else {
+      EXPECT_EQ(spp, ramp);
+    }
+    auto frame = (*view)->readFrame(true);
+    ASSERT_TRUE(frame.ok());
+    const Frame& f = frame.value();
+    ASSERT_EQ(f.stats.spp, 23u);
+    const size_t centre = 4 * (size_t(f.height / 2) * f.width + f.width / 2);
+    EXPECT_NEAR(f.rgba32f[centre], 1.0f, 1e-5f);
+  }
+}
+
+}  // namespace
+}  // namespace brdfa
