@@ -277,6 +277,41 @@ TEST_F(Sessions, StreamSendsHalfSizePreviewsUntilFourSamplesAndTheConvergedFrame
   EXPECT_EQ(pngWidth(r->body), 512u);
 }
 
+// While a stream client watches, each pass is sized to a 50 ms frame (Session::kStreamFrameMs);
+// a script waiting on /frame gets passes of samples_per_frame. Up to 511 samples with 256 per
+// pass, the unwatched passes ramp 1, 2, ... 256: 9 of them. The BRDF is a white Lambertian
+// made slow (tests/hostile/slow_loop.brdf, 40 rounds a sample), so that on lavapipe a pass of
+// one sample fits a frame and one of 256 does not: watched, the passes are smaller and more.
+// It is 1 in the furnace whatever the pass sizes.
+TEST_F(Sessions, AWatchedStreamTakesPassesThatFitItsFrameInterval) {
+  auto r = put("/api/brdfs/itest_slow_lambert", readRepoFile("tests/hostile/slow_loop.brdf"), "text/plain");
+  ASSERT_TRUE(r && (r->status == 200 || r->status == 201)) << (r ? r->body : "");
+  auto scene = [](double iterations) {
+    return furnaceScene("itest_slow_lambert", {{"iterations", iterations}}, 512, 511, 256).dump();
+  };
+  r = put("/api/sessions/default/scene", scene(40));
+  ASSERT_TRUE(r && r->status == 200) << (r ? r->body : "");
+  Image img;
+  ASSERT_NO_FATAL_FAILURE(frame("default", 511, img));
+  json unwatched = bodyJson(get("/api/sessions/default/stats"));
+  EXPECT_EQ(unwatched["passes"], 9) << unwatched.dump();
+  EXPECT_NEAR(interiorMean(img, 1.0, 1e-4), 1.0, 1e-4);
+  const double fullPassMs = unwatched["last_pass_ms"].get<double>();
+  constexpr double kStreamFrameMs = 50;  // Session::kStreamFrameMs
+  if (fullPassMs < 4 * kStreamFrameMs)
+    GTEST_SKIP() << "a 256-sample pass took " << fullPassMs << " ms on this device: passes of a frame would be large";
+
+  r = put("/api/sessions/default/scene", scene(41));  // a restart: the passes are measured afresh
+  ASSERT_TRUE(r && r->status == 200) << (r ? r->body : "");
+  PartReader reader = streamUntil(*server_, 511);
+  ASSERT_TRUE(reader.error.empty()) << reader.error;
+  EXPECT_EQ(reader.samples.back(), 511u);
+  json watched = bodyJson(get("/api/sessions/default/stats"));
+  EXPECT_GT(watched["passes"].get<int>(), 12) << "a 256-sample pass took " << fullPassMs << " ms; " << watched.dump();
+  ASSERT_NO_FATAL_FAILURE(frame("default", 511, img));
+  EXPECT_NEAR(interiorMean(img, 1.0, 1e-4), 1.0, 1e-4);
+}
+
 TEST_F(Sessions, TwoSessionsKeepSeparateScenes) {
   auto ra = post("/api/sessions", furnaceScene("itest_lambert", {{"Kd", {0.25, 0.25, 0.25}}}, 32, 16).dump());
   auto rb = post("/api/sessions", furnaceScene("itest_lambert", {{"Kd", {0.75, 0.75, 0.75}}}, 48, 16).dump());

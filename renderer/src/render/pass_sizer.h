@@ -23,12 +23,18 @@ class PassSizer {
   // the one count measured. Negative when nothing is measured.
   double predict(uint32_t samples) const;
 
-  // The most samples in [1, cap] whose predicted time is at most targetMs; `cap` when nothing
-  // is measured yet, 1 when even one sample is predicted over the target. A wrong guess is
-  // measured and corrected by the next choice.
+  // The most samples in [floor, cap] whose predicted time is at most targetMs, where floor is
+  // the count whose samples take as long as the pass's fixed part (by the line; 1 without
+  // one): at least half of every pass goes to samples. `cap` when nothing is measured yet or
+  // when even one sample is predicted over the target (the frame rate is out of reach: smaller
+  // passes would only lose throughput); floor when floor samples are. A wrong guess is measured
+  // and corrected by the next choice.
   uint32_t fit(double targetMs, uint32_t cap) const;
 
  private:
+  // The least-squares line ms = fixed + perSample * samples through the measured counts;
+  // false with fewer than two counts or a line that does not rise.
+  bool line(double& fixed, double& perSample) const;
   struct Point {
     uint32_t samples;
     double ms;
