@@ -55,18 +55,27 @@ double PassSizer::predict(uint32_t samples) const {
 }
 
 uint32_t PassSizer::fit(double targetMs, uint32_t cap) const {
-  if (points_.empty() || cap <= 1) return std::max<uint32_t>(cap, 1);
-  // Out of reach: even one sample misses the frame (a large image on a CPU device). Smaller
-  // passes would only spend more of the time on their fixed part.
-  if (predict(1) > targetMs) return cap;
-  // Never so few samples that the pass's fixed part outweighs them: at least half of a pass
-  // goes to samples, whatever the target.
-  uint32_t floor = 1;
+  if (cap <= 1) return 1;
   double fixed = 0, perSample = 0;
-  if (line(fixed, perSample)) floor = static_cast<uint32_t>(std::min<double>(std::ceil(fixed / perSample), cap));
+  if (!line(fixed, perSample)) {
+    // One count measured (or a line that does not rise): nothing tells a pass's fixed part
+    // from its samples. Where that count missed the target, half as many once measure a
+    // second count; sized from one count alone, a pass that missed could be followed by
+    // passes of the same size forever.
+    if (points_.size() == 1 && points_[0].ms > targetMs && points_[0].samples > 1)
+      return std::min(cap, points_[0].samples / 2);
+    return cap;
+  }
+  // Never fewer samples than fit in the pass's fixed part's time: about half of a pass or more
+  // goes to samples. Rounded down: the line is measured under noise, and a floor one too high
+  // made the GGX stream's 2-sample passes 3 (18 instead of 22 frames/s).
+  const uint32_t floor = static_cast<uint32_t>(std::clamp(std::floor(fixed / perSample), 1.0, double(cap)));
+  // Out of reach: even that many would take twice the frame (a large image on a CPU device);
+  // smaller passes would only spend more of the time on their fixed part.
+  if (predict(floor) > 2 * targetMs) return cap;
   for (uint32_t samples = cap; samples > floor; --samples)
     if (predict(samples) <= targetMs) return samples;
-  return std::max<uint32_t>(floor, 1);
+  return floor;
 }
 
 }  // namespace brdfa

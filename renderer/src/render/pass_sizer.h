@@ -15,7 +15,9 @@ class PassSizer {
   void reset() { points_.clear(); }
 
   // A complete pass of `samples` samples per pixel took `ms` (device and host, as the caller
-  // waited for it). Kept as a running mean per sample count, newer passes weighing more.
+  // waited for it). Kept as a running mean per sample count, newer passes weighing more. The
+  // caller leaves out passes whose time is not a pass's like the others (the first after a
+  // restart, and those split for a prompt interruption).
   void record(uint32_t samples, double ms);
 
   // The predicted time of a pass of `samples`: its running mean when measured, else the line
@@ -24,11 +26,12 @@ class PassSizer {
   double predict(uint32_t samples) const;
 
   // The most samples in [floor, cap] whose predicted time is at most targetMs, where floor is
-  // the count whose samples take as long as the pass's fixed part (by the line; 1 without
-  // one): at least half of every pass goes to samples. `cap` when nothing is measured yet or
-  // when even one sample is predicted over the target (the frame rate is out of reach: smaller
-  // passes would only lose throughput); floor when floor samples are. A wrong guess is measured
-  // and corrected by the next choice.
+  // the most samples that take no longer than the pass's fixed part (by the line; at least 1),
+  // so that about half of every pass or more goes to samples; floor when none fits. With one count measured,
+  // half of it if it missed the target (to measure a second), else `cap`; `cap` with nothing
+  // measured, and when floor samples would take over twice the target (the frame rate is out
+  // of reach: smaller passes would only lose throughput). A wrong guess is measured and
+  // corrected by the next choice.
   uint32_t fit(double targetMs, uint32_t cap) const;
 
  private:

@@ -977,7 +977,9 @@ Result<FrameStats> RenderViewImpl::passLocked(bool interruptible, double frameTa
     return stats_;
   }
   stats_.preview = false;
-  sizer_.record(count, passMs);
+  // The first passes after a restart carry the restart's work or are split into short
+  // submissions (kInteractivePasses): their times would read as a large fixed part.
+  if (stats_.passes >= kInteractivePasses) sizer_.record(count, passMs);
   stats_.spp += count;
   stats_.passes += 1;
   stats_.elapsedMs += segmentMs;
