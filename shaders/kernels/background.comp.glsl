@@ -12,6 +12,10 @@
 layout(local_size_x = 8, local_size_y = 8, local_size_z = 1) in;
 
 void main() {
+  // target.w bit 1: a preview's once-per-restart write, one lookup per 2x2 block through the
+  // block's centre, written to the block's pixels the raster left empty (render_view.cpp,
+  // recordPending); the next pass writes the full-resolution background.
+  bool blocks = (brdfa_pc.target.w & 2u) != 0u;
   uvec2 p;
   if (brdfa_pc.target.x != 0u) {
     // The per-pass use over a list of target.x edge pixels (brdfa_edgePixels), 64 per group,
@@ -25,18 +29,26 @@ void main() {
     uint listed = texelFetch(brdfa_edgePixels, int(k)).x;
     p = uvec2(listed % brdfa_pc.frame.x, listed / brdfa_pc.frame.x);
   } else {
-    p = gl_GlobalInvocationID.xy + uvec2(brdfa_pc.target.z & 0xffffu, brdfa_pc.target.z >> 16);
+    p = (blocks ? 2u : 1u) * gl_GlobalInvocationID.xy + uvec2(brdfa_pc.target.z & 0xffffu, brdfa_pc.target.z >> 16);
     if (p.x >= brdfa_pc.frame.x || p.y >= brdfa_pc.frame.y) return;
   }
   uint pixel = brdfa_pixelIndex(p);
-  if (brdfa_gSurface(pixel).x != 0u) return;  // covered by an object
+  if (!blocks && brdfa_gSurface(pixel).x != 0u) return;  // covered by an object
 
-  vec3 radiance = brdfa_environmentUnit(brdfa_toEnvironment(brdfa_viewRay(p, brdfa_pc.tone.zw))) *
-                  brdfa_environmentIntensity();
+  vec2 at = brdfa_pc.tone.zw + (blocks ? vec2(0.5) : vec2(0.0));
+  vec3 radiance = brdfa_environmentUnit(brdfa_toEnvironment(brdfa_viewRay(p, at))) * brdfa_environmentIntensity();
   uint count = brdfa_pc.frame.w;
   if (count == 0u) {
-    brdfa_accumStore(0u, pixel, vec4(radiance, 1.0));
-    brdfa_accumStore(1u, pixel, vec4(radiance, 1.0));
+    // A loop, not an if: a CPU device skips a loop no lane enters (the full-resolution write's
+    // three other pixels), but runs both sides of an if for every lane.
+    for (uint k = 0u; k < (blocks ? 4u : 1u); ++k) {
+      uvec2 q = p + uvec2(k & 1u, k >> 1u);
+      if (q.x >= brdfa_pc.frame.x || q.y >= brdfa_pc.frame.y) continue;
+      uint written = brdfa_pixelIndex(q);
+      if (blocks && brdfa_gSurface(written).x != 0u) continue;
+      brdfa_accumStore(0u, written, vec4(radiance, 1.0));
+      brdfa_accumStore(1u, written, vec4(radiance, 1.0));
+    }
     return;
   }
   // The pass's samples first .. first + count - 1 go to the halves by parity, as in the shade
@@ -44,7 +56,7 @@ void main() {
   uint first = brdfa_pc.frame.z;
   float countA = float((first + count + 1u) / 2u - (first + 1u) / 2u);
   float countB = float(count) - countA;
-  bool overwrite = brdfa_pc.target.w != 0u;
+  bool overwrite = (brdfa_pc.target.w & 1u) != 0u;
   brdfa_accumulate(0u, pixel, vec4(radiance * countA, countA), overwrite);
   brdfa_accumulate(1u, pixel, vec4(radiance * countB, countB), overwrite);
 }

@@ -286,6 +286,59 @@ TEST(SplitPasses, PreviewPassComesFirstAndLeavesNoTrace) {
   }
 }
 
+// A preview after a camera change writes the visible background at its own resolution, one
+// lookup per 2x2 block (through the block's centre), and the next pass writes it in full: the
+// preview's sky is constant over each block and near the full-resolution sky; the image at
+// the end is the image without a preview, background included.
+TEST(SplitPasses, PreviewWritesTheBackgroundPerBlockAndTheNextPassInFull) {
+  auto renderer = makeRenderer(0.0);
+  ASSERT_TRUE(renderer);
+  Scene scene = twoObjectScene();
+  scene.render.width = 256;
+  scene.render.height = 260;
+  ASSERT_EQ(scene.environment.name, "sky");
+  ASSERT_TRUE(scene.environment.visible);
+  const Frame plain = render(*renderer, scene);
+  Scene withPreview = scene;
+  withPreview.render.previewPass = true;
+  auto view = renderer->createView();
+  ASSERT_TRUE(view.ok());
+  ASSERT_TRUE(view.value()->setScene(withPreview).ok());
+  auto first = view.value()->renderPass();
+  ASSERT_TRUE(first.ok()) << first.error().message;
+  ASSERT_TRUE(first->preview);
+  auto preview = view.value()->readFrame(true);
+  ASSERT_TRUE(preview.ok());
+  // The top 24 rows are sky (the objects sit lower).
+  const int w = preview->width;
+  auto at = [&](const Frame& f, int x, int y, int c) { return f.rgba32f[4 * (size_t(y) * w + x) + c]; };
+  double lowest = 1e30, highest = 0;
+  for (int y = 0; y < 24; y += 2)
+    for (int x = 0; x < w; x += 2)
+      for (int c = 0; c < 3; ++c) {
+        const float v = at(*preview, x, y, c);
+        ASSERT_EQ(at(*preview, x + 1, y, c), v) << x << ", " << y;
+        ASSERT_EQ(at(*preview, x, y + 1, c), v) << x << ", " << y;
+        ASSERT_EQ(at(*preview, x + 1, y + 1, c), v) << x << ", " << y;
+        ASSERT_GT(at(plain, x, y, c), 0.0f);
+        EXPECT_NEAR(v, at(plain, x, y, c), 0.05 * at(plain, x, y, c)) << x << ", " << y;
+        lowest = std::min<double>(lowest, v);
+        highest = std::max<double>(highest, v);
+      }
+  EXPECT_GT(highest, 1.05 * lowest) << "the sky should vary over the rows";
+  for (int guard = 0; guard < 10000; ++guard) {
+    auto pass = view.value()->renderPass();
+    ASSERT_TRUE(pass.ok());
+    if (pass->done()) break;
+  }
+  auto last = view.value()->readFrame(true);
+  ASSERT_TRUE(last.ok());
+  ASSERT_EQ(last->rgba32f.size(), plain.rgba32f.size());
+  for (size_t i = 0; i < last->rgba32f.size(); ++i)
+    ASSERT_NEAR(last->rgba32f[i], plain.rgba32f[i], 1e-5f * std::max(1.0f, std::abs(plain.rgba32f[i])))
+        << "value " << i << " (pixel " << i / 4 << ")";
+}
+
 Scene furnaceScene(std::shared_ptr<const BrdfDefinition> brdf, int size, int samplesPerFrame, int spp) {
   Scene s;
   s.environment.name = "furnace";

@@ -567,7 +567,7 @@ void RenderViewImpl::recordRaster(VkCommandBuffer cb, uint32_t slice) {
 }
 
 void RenderViewImpl::recordBackground(VkCommandBuffer cb, const PixelRect& rect, uint32_t slice, uint32_t count,
-                                      bool firstPass) {
+                                      bool firstPass, bool blocks) {
   if (rect.width == 0 || rect.height == 0) return;
   ComputePush push = basePush();
   const bool visible = scene_.environment.visible;
@@ -580,7 +580,7 @@ void RenderViewImpl::recordBackground(VkCommandBuffer cb, const PixelRect& rect,
   push.frame[2] = static_cast<uint32_t>(stats_.spp);  // index of the pass's first sample
   push.frame[3] = count;  // 0: the once-per-restart write
   push.target[2] = rect.x | (rect.y << 16);
-  push.target[3] = firstPass ? 1u : 0u;
+  push.target[3] = (firstPass ? 1u : 0u) | (blocks ? 2u : 0u);
   // The per-pass use goes over the edge list once it is known (see the kernel).
   const bool list = count > 0 && edgeListKnown_;
   if (list && edgeCount_ == 0) return;
@@ -588,13 +588,14 @@ void RenderViewImpl::recordBackground(VkCommandBuffer cb, const PixelRect& rect,
   vkCmdBindPipeline(cb, VK_PIPELINE_BIND_POINT_COMPUTE, r_->backgroundPipeline(env_->constant || !visible));
   vkCmdBindDescriptorSets(cb, VK_PIPELINE_BIND_POINT_COMPUTE, r_->computeLayout(), 0, 1, &viewSets_[slice], 0, nullptr);
   vkCmdPushConstants(cb, r_->computeLayout(), VK_SHADER_STAGE_COMPUTE_BIT, 0, sizeof(push), &push);
+  const uint32_t scale = blocks ? 2 : 1;
   if (list)
     vkCmdDispatch(cb, groups(edgeCount_, kShadeGroup * kShadeGroup), 1, 1);
   else
-    vkCmdDispatch(cb, groups(rect.width, kShadeGroup), groups(rect.height, kShadeGroup), 1);
+    vkCmdDispatch(cb, groups(groups(rect.width, scale), kShadeGroup), groups(groups(rect.height, scale), kShadeGroup), 1);
 }
 
-void RenderViewImpl::recordPending(VkCommandBuffer cb, uint32_t slice, bool resuming) {
+void RenderViewImpl::recordPending(VkCommandBuffer cb, uint32_t slice, bool resuming, bool preview) {
   // Slice 0 carries the coverage the resolve and the once-per-restart background use.
   const bool raster = (slicesReady_ & 1u) == 0 || (slicesReady_ & (1u << slice)) == 0;
   if ((slicesReady_ & 1u) == 0) recordRaster(cb, 0);
@@ -605,9 +606,14 @@ void RenderViewImpl::recordPending(VkCommandBuffer cb, uint32_t slice, bool resu
   if (raster || clearPending_ || firstPass)
     memoryBarrier(cb, VK_PIPELINE_STAGE_TRANSFER_BIT, VK_ACCESS_TRANSFER_WRITE_BIT,
                   VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_ACCESS_SHADER_READ_BIT | VK_ACCESS_SHADER_WRITE_BIT);
-  if (clearPending_ && scene_.environment.visible) {
-    // Deterministic outside the objects' bounds: written once per restart, not every pass.
-    recordBackground(cb, PixelRect{0, 0, width_, height_}, 0, 0, false);
+  // Deterministic outside the objects' bounds: written once per restart, not every pass. A
+  // preview writes it at its own resolution, one lookup per 2x2 block (a camera dragged on
+  // lavapipe: 10 -> ~3 ms of a 40 ms restart), and leaves the full one to the next pass.
+  const bool background = (clearPending_ || (blockBackground_ && !preview)) && scene_.environment.visible;
+  const bool blocks = clearPending_ && preview;
+  blockBackground_ = preview ? blockBackground_ || blocks : false;
+  if (background) {
+    recordBackground(cb, PixelRect{0, 0, width_, height_}, 0, 0, false, blocks);
     memoryBarrier(cb, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_ACCESS_SHADER_WRITE_BIT,
                   VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_ACCESS_SHADER_READ_BIT | VK_ACCESS_SHADER_WRITE_BIT);
   }
@@ -815,7 +821,7 @@ Result<FrameStats> RenderViewImpl::passLocked(bool interruptible, double frameTa
     if (!begun) return begun.takeError();
     cb = *begun;
     if (submissions == 0) {
-      recordPending(cb, slice, resumed.has_value());
+      recordPending(cb, slice, resumed.has_value(), preview);
       BRDFA_TRY(endPhase(breakdown.setupMs));
     } else  // the accumulators are read-modify-written; earlier submissions' writes come first
       memoryBarrier(cb, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_ACCESS_SHADER_WRITE_BIT,
@@ -974,6 +980,10 @@ Result<FrameStats> RenderViewImpl::passLocked(bool interruptible, double frameTa
     stats_.lastPassMs = passMs;
     stats_.submissions = submissions;
     stats_.maxSubmissionMs = maxSubmissionMs;
+    if (profile) {
+      breakdown.otherMs = passMs - breakdown.setupMs - breakdown.shadeMs - breakdown.edgeMs - breakdown.resolveMs;
+      stats_.breakdown = breakdown;
+    }
     return stats_;
   }
   stats_.preview = false;

@@ -55,11 +55,15 @@ class RenderViewImpl final : public RenderView {
   // Records what a scene change left pending: the raster pass of G-buffer slice 0 and of
   // `slice` into their G-buffer planes; clearing the accumulators and writing the background.
   // `resuming`: the first submission of an interrupted pass's remainder.
-  void recordPending(VkCommandBuffer cb, uint32_t slice, bool resuming = false);
+  // A `preview` pass writes the background at 2x2 blocks and leaves it pending at full
+  // resolution (blockBackground_) for the next pass or frame read.
+  void recordPending(VkCommandBuffer cb, uint32_t slice, bool resuming = false, bool preview = false);
   void recordRaster(VkCommandBuffer cb, uint32_t slice);
   // The background where no object can be (outside every object's screen bounds) is written
   // once per restart; inside those bounds it is sampled each pass with that pass's jitter.
-  void recordBackground(VkCommandBuffer cb, const PixelRect& rect, uint32_t slice, uint32_t count, bool firstPass);
+  // `blocks`: the once-per-restart write (count 0) at one lookup per 2x2 block (a preview).
+  void recordBackground(VkCommandBuffer cb, const PixelRect& rect, uint32_t slice, uint32_t count, bool firstPass,
+                        bool blocks = false);
   void recordResolve(VkCommandBuffer cb, bool linear);
   ErrorSums deviceErrorSums() const;  // from the resolve kernel's partial sums
   HostResolveInput hostResolveInput() const;
@@ -111,6 +115,7 @@ class RenderViewImpl final : public RenderView {
   std::shared_ptr<const GpuEnvironment> env_;
   std::vector<ObjectState> objects_;
   bool clearPending_ = true;
+  bool blockBackground_ = false;  // the background holds a preview's 2x2 blocks (recordPending)
   // Splitting passes into submissions of about ctx().submissionTargetMs(fence) (see renderPass): the
   // device cost of shading learned from this view's own submissions, in ms per cost unit (about
   // a pixel-sample; 0: not measured since the shading last changed), and the largest
