@@ -44,6 +44,19 @@ vec3 BRDF(vec3 L, vec3 V, vec3 N, vec3 X, vec3 Y) { return Kd / PI; }
 ::end shader
 )";
 
+// Runs passes until the view is done (converged or max_samples reached), every pass
+// succeeding, and reads the frame with linear radiance.
+inline Frame renderUntilDone(RenderView& view) {
+  for (int guard = 0; guard < 1000000; ++guard) {
+    auto pass = view.renderPass();
+    EXPECT_TRUE(pass.ok());
+    if (!pass.ok() || pass->done()) break;
+  }
+  auto frame = view.readFrame(true);
+  EXPECT_TRUE(frame.ok());
+  return frame.ok() ? frame.value() : Frame{};
+}
+
 // A fixture whose suite shares one renderer (the device opens once per suite).
 class DeviceTest : public ::testing::Test {
  protected:
@@ -55,19 +68,6 @@ class DeviceTest : public ::testing::Test {
     renderer_ = r.value();
   }
   static void TearDownTestSuite() { renderer_.reset(); }
-
-  // Runs passes until the view is done (converged or max_samples reached) and reads the frame
-  // with linear radiance.
-  static Frame renderUntilDone(RenderView& view) {
-    for (int guard = 0; guard < 1000000; ++guard) {
-      auto pass = view.renderPass();
-      EXPECT_TRUE(pass.ok());
-      if (!pass.ok() || pass->done()) break;
-    }
-    auto frame = view.readFrame(true);
-    EXPECT_TRUE(frame.ok());
-    return frame.ok() ? frame.value() : Frame{};
-  }
 
   static inline std::shared_ptr<Renderer> renderer_;
 };

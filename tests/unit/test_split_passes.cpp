@@ -57,6 +57,14 @@ Frame render(Renderer& renderer, const Scene& scene, uint64_t* submissions = nul
   return frame.ok() ? frame.value() : Frame{};
 }
 
+// The same linear image to float rounding: split passes add the same samples in another order.
+void expectSameImage(const Frame& got, const Frame& want) {
+  ASSERT_EQ(got.rgba32f.size(), want.rgba32f.size());
+  for (size_t i = 0; i < want.rgba32f.size(); ++i)
+    ASSERT_NEAR(got.rgba32f[i], want.rgba32f[i], 1e-5f * std::max(1.0f, std::abs(want.rgba32f[i])))
+        << "value " << i << " (pixel " << i / 4 << ")";
+}
+
 // Two objects with different BRDFs and overlapping bounds, in a visible, non-constant
 // environment (the background of the objects' bounds is sampled with each pass), multiple
 // importance sampling, and passes of 1, 2, 4, 8, 8 and 1 samples.
@@ -150,9 +158,7 @@ TEST(SplitPasses, InterruptedPassesCompleteToTheSameImage) {
   EXPECT_EQ(frame->stats.spp, reference.stats.spp);
   EXPECT_EQ(frame->stats.passes, reference.stats.passes);
   EXPECT_EQ(frame->stats.nanSamples, reference.stats.nanSamples);
-  for (size_t i = 0; i < frame->rgba32f.size(); ++i)
-    ASSERT_NEAR(frame->rgba32f[i], reference.rgba32f[i], 1e-5f * std::max(1.0f, std::abs(reference.rgba32f[i])))
-        << "value " << i << " (pixel " << i / 4 << ")";
+  ASSERT_NO_FATAL_FAILURE(expectSameImage(*frame, reference));
 
   // A frame read while a pass is interrupted completes that pass first: its first pass after a
   // restart leaves no pixel of the old image (here the previous BRDF's), and the count is exact.
@@ -188,9 +194,7 @@ TEST(SplitPasses, InterruptedPassesCompleteToTheSameImage) {
   ASSERT_EQ(interruptedSwitch.rgba32f.size(), switched.rgba32f.size());
   EXPECT_EQ(interruptedSwitch.stats.spp, 1u);
   EXPECT_EQ(switched.stats.spp, 1u);
-  for (size_t i = 0; i < switched.rgba32f.size(); ++i)
-    ASSERT_NEAR(interruptedSwitch.rgba32f[i], switched.rgba32f[i], 1e-5f * std::max(1.0f, std::abs(switched.rgba32f[i])))
-        << "value " << i << " (pixel " << i / 4 << ")";
+  ASSERT_NO_FATAL_FAILURE(expectSameImage(interruptedSwitch, switched));
 
   // A restart drops an interrupted pass: the new scene's image is a fresh view's.
   ASSERT_TRUE(view.value()->setScene(other).ok());
@@ -200,17 +204,9 @@ TEST(SplitPasses, InterruptedPassesCompleteToTheSameImage) {
   ASSERT_TRUE(cutAgain.ok());
   ASSERT_EQ(cutAgain->spp, 1u);
   ASSERT_TRUE(view.value()->setScene(scene).ok());
-  for (int guard = 0; guard < 10000; ++guard) {
-    auto pass = view.value()->renderPass();
-    ASSERT_TRUE(pass.ok());
-    if (pass->done()) break;
-  }
-  auto again = view.value()->readFrame(true);
-  ASSERT_TRUE(again.ok());
-  EXPECT_EQ(again->stats.spp, reference.stats.spp);
-  for (size_t i = 0; i < again->rgba32f.size(); ++i)
-    ASSERT_NEAR(again->rgba32f[i], reference.rgba32f[i], 1e-5f * std::max(1.0f, std::abs(reference.rgba32f[i])))
-        << "value " << i << " (pixel " << i / 4 << ")";
+  const Frame again = renderUntilDone(*view.value());
+  EXPECT_EQ(again.stats.spp, reference.stats.spp);
+  ASSERT_NO_FATAL_FAILURE(expectSameImage(again, reference));
 }
 
 // Issue 15: with RenderSettings::previewPass the first pass after a restart is a preview, one
@@ -280,9 +276,7 @@ TEST(SplitPasses, PreviewPassComesFirstAndLeavesNoTrace) {
     ASSERT_TRUE(last.ok());
     EXPECT_EQ(last->stats.spp, plain.stats.spp);
     EXPECT_EQ(last->stats.passes, plain.stats.passes);
-    for (size_t i = 0; i < last->rgba32f.size(); ++i)
-      ASSERT_NEAR(last->rgba32f[i], plain.rgba32f[i], 1e-5f * std::max(1.0f, std::abs(plain.rgba32f[i])))
-          << "value " << i << " (pixel " << i / 4 << ")";
+    ASSERT_NO_FATAL_FAILURE(expectSameImage(*last, plain));
   }
 }
 
@@ -326,17 +320,7 @@ TEST(SplitPasses, PreviewWritesTheBackgroundPerBlockAndTheNextPassInFull) {
         highest = std::max<double>(highest, v);
       }
   EXPECT_GT(highest, 1.05 * lowest) << "the sky should vary over the rows";
-  for (int guard = 0; guard < 10000; ++guard) {
-    auto pass = view.value()->renderPass();
-    ASSERT_TRUE(pass.ok());
-    if (pass->done()) break;
-  }
-  auto last = view.value()->readFrame(true);
-  ASSERT_TRUE(last.ok());
-  ASSERT_EQ(last->rgba32f.size(), plain.rgba32f.size());
-  for (size_t i = 0; i < last->rgba32f.size(); ++i)
-    ASSERT_NEAR(last->rgba32f[i], plain.rgba32f[i], 1e-5f * std::max(1.0f, std::abs(plain.rgba32f[i])))
-        << "value " << i << " (pixel " << i / 4 << ")";
+  ASSERT_NO_FATAL_FAILURE(expectSameImage(renderUntilDone(*view.value()), plain));
 }
 
 Scene furnaceScene(std::shared_ptr<const BrdfDefinition> brdf, int size, int samplesPerFrame, int spp) {
