@@ -165,8 +165,9 @@ class RenderView {
   // done() (converged to render.target_error, or max_samples reached).
   // With frameTargetMs > 0 (a stream shows every pass), fewer again when the passes measured
   // since the last restart predict that the pass would take longer than that: the most
-  // samples that fit, at least 1 (more passes of fewer samples: a higher frame rate for a
-  // little less throughput, each pass's fixed costs being paid more often).
+  // samples that fit, but never fewer than take as long as a pass's fixed part, and none
+  // fewer where even those would take twice the target (more passes of fewer samples: a
+  // higher frame rate for a little less throughput, each pass's fixed part paid more often).
   virtual Result<FrameStats> renderPass(double frameTargetMs) = 0;
   Result<FrameStats> renderPass() { return renderPass(0.0); }
 

@@ -27,11 +27,11 @@ class PassSizer {
 
   // The most samples in [floor, cap] whose predicted time is at most targetMs, where floor is
   // the most samples that take no longer than the pass's fixed part (by the line; at least 1),
-  // so that about half of every pass or more goes to samples; floor when none fits. With one count measured,
-  // half of it if it missed the target (to measure a second), else `cap`; `cap` with nothing
-  // measured, and when floor samples would take over twice the target (the frame rate is out
-  // of reach: smaller passes would only lose throughput). A wrong guess is measured and
-  // corrected by the next choice.
+  // so that about half of every pass or more goes to samples; floor when none fits. With one
+  // count measured: half of it if it missed the target (to measure a second), else `cap`.
+  // `cap` with nothing measured, and when floor samples would take over twice the target (the
+  // frame rate is out of reach: smaller passes would only lose throughput). A wrong guess is
+  // measured and corrected by the next choice.
   uint32_t fit(double targetMs, uint32_t cap) const;
 
  private:
