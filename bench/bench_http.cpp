@@ -129,11 +129,9 @@ bool measureService(const std::string& serverBinary, const std::string& sourceDi
 
   // A new BRDF each time: a changed constant in the code, so no cache of any kind can help.
   const std::string ggx = readText(sourceDir + "/shaders/brdfs/ggx.brdf");
-  const std::string call = "return D_GGX(";
   std::vector<double> editMs, editFullMs;
   for (int i = 0; i < 5; ++i) {
-    std::string source = ggx;
-    source.replace(source.find(call), call.size(), "return " + uniqueFactor(i) + " * D_GGX(");
+    const std::string source = withUniqueFactor(ggx, "D_GGX(", i);
     const std::string name = "bench_edit_" + std::to_string(i);
     auto t0 = Clock::now();
     bool good = ok(cli->Put("/api/brdfs/" + name, source, "text/plain"), 201) &&

@@ -16,4 +16,14 @@ inline std::string uniqueFactor(int i) {
   return text;
 }
 
+// `source` (a .brdf text) with its first `return <returned>` scaled by uniqueFactor(i): a BRDF
+// new to every cache, with the same value to 1 part in 1000. Empty (a file that fails to
+// parse, with its error) when `source` has no such return.
+inline std::string withUniqueFactor(std::string source, const std::string& returned, int i) {
+  const std::string line = "return " + returned;
+  const size_t at = source.find(line);
+  if (at == std::string::npos) return {};
+  return source.replace(at, line.size(), "return " + uniqueFactor(i) + " * " + returned);
+}
+
 }  // namespace brdfa::bench

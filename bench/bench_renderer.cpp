@@ -151,9 +151,11 @@ int runRendererBench(const std::string& sourceDir, int rounds) {
   std::vector<double> compileMs, firstPassMs, setSceneMs;
   const std::string lambert = readText(sourceDir + "/shaders/brdfs/lambert.brdf");
   for (int i = 0; i < 5; ++i) {
-    std::string source = lambert;
-    source.replace(source.find("return Kd / PI;"), 15, "return Kd / PI * " + uniqueFactor(i) + ";");
-    auto def = parseBrdf(source);
+    auto def = parseBrdf(withUniqueFactor(lambert, "Kd / PI;", i));
+    if (!def) {
+      std::fprintf(stderr, "the edited lambert.brdf: %s\n", def.error().message.c_str());
+      return 1;
+    }
     auto t0 = std::chrono::steady_clock::now();
     auto info = (*renderer)->compileBrdf(def.value());
     compileMs.push_back(info ? info->compileMs : -1);

@@ -64,13 +64,12 @@ int runShaderAbBench(const std::string& sourceDir, const std::vector<std::string
     t.editing = std::move(editing.value());
   }
   const std::string ggx = readText(sourceDir + "/shaders/brdfs/ggx.brdf");
-  const std::string call = "return D_GGX(";
-  auto editedScene = [&](int nonce) {
+  auto editedScene = [&](int nonce) -> Result<Scene> {
     Scene s = ggxScene(sourceDir, true, 4);
     s.render.sampling = SamplingMode::Mis;
-    std::string text = ggx;
-    text.replace(text.find(call), call.size(), "return " + uniqueFactor(nonce) + " * D_GGX(");
-    s.objects[0].brdf = std::make_shared<BrdfDefinition>(parseBrdf(text).value());
+    auto def = parseBrdf(withUniqueFactor(ggx, "D_GGX(", nonce));
+    if (!def) return def.takeError();
+    s.objects[0].brdf = std::make_shared<BrdfDefinition>(def.value());
     return s;
   };
   auto movedScene = [&](int step) {
@@ -94,7 +93,8 @@ int runShaderAbBench(const std::string& sourceDir, const std::vector<std::string
     for (size_t k = 0; k < trees.size() && i < rounds; ++k) {  // round -1 rasterizes; half the rounds
       Tree& t = trees[k];
       const auto t0 = std::chrono::steady_clock::now();
-      if (!t.editing->setScene(editedScene(int(1000 * k) + i + 1)) || !t.editing->renderPass()) return 1;
+      auto edited = editedScene(int(1000 * k) + i + 1);
+      if (!edited || !t.editing->setScene(*edited) || !t.editing->renderPass()) return 1;
       if (i >= 0) t.editMs.push_back(msSince(t0));
     }
   }
