@@ -65,6 +65,18 @@ void expectSameImage(const Frame& got, const Frame& want) {
         << "value " << i << " (pixel " << i / 4 << ")";
 }
 
+// A view of `scene` with RenderSettings::previewPass set: its next pass is the preview. Null
+// (with the failure reported) when the view or the scene cannot be made.
+std::unique_ptr<RenderView> previewView(Renderer& renderer, Scene scene) {
+  scene.render.previewPass = true;
+  auto view = renderer.createView();
+  EXPECT_TRUE(view.ok());
+  if (!view.ok()) return nullptr;
+  auto set = view.value()->setScene(scene);
+  EXPECT_TRUE(set.ok()) << (set.ok() ? "" : set.error().message);
+  return set.ok() ? std::move(view.value()) : nullptr;
+}
+
 // Two objects with different BRDFs and overlapping bounds, in a visible, non-constant
 // environment (the background of the objects' bounds is sampled with each pass), multiple
 // importance sampling, and passes of 1, 2, 4, 8, 8 and 1 samples.
@@ -230,19 +242,16 @@ TEST(SplitPasses, PreviewPassComesFirstAndLeavesNoTrace) {
     onePass.render.maxSamples = 1;
     const Frame plainFirst = render(*renderer, onePass);
 
-    Scene withPreview = scene;
-    withPreview.render.previewPass = true;
-    auto view = renderer->createView();
-    ASSERT_TRUE(view.ok());
-    ASSERT_TRUE(view.value()->setScene(withPreview).ok());
+    std::unique_ptr<RenderView> view = previewView(*renderer, scene);
+    ASSERT_TRUE(view);
     // A preview runs to its end; the request is taken by the pass after it (split passes).
-    if (target > 0) view.value()->interruptPass();
-    auto first = view.value()->renderPass();
+    if (target > 0) view->interruptPass();
+    auto first = view->renderPass();
     ASSERT_TRUE(first.ok()) << first.error().message;
     EXPECT_TRUE(first->preview);
     EXPECT_EQ(first->spp, 0u);
     EXPECT_EQ(first->passes, 0u);
-    auto previewFrame = view.value()->readFrame(true);
+    auto previewFrame = view->readFrame(true);
     ASSERT_TRUE(previewFrame.ok());
     EXPECT_TRUE(previewFrame->stats.preview);
     // The teapot (white Lambertian, cosine sampling, furnace): 1 exactly wherever the first
@@ -262,7 +271,7 @@ TEST(SplitPasses, PreviewPassComesFirstAndLeavesNoTrace) {
     EXPECT_GT(lit, 2000u);
     EXPECT_GT(previewLit, lit * 3 / 4);
     for (int guard = 0; guard < 10000; ++guard) {
-      auto pass = view.value()->renderPass();
+      auto pass = view->renderPass();
       ASSERT_TRUE(pass.ok());
       if (guard == 0 && target > 0) {
         EXPECT_EQ(pass->spp, 0u) << "the first pass was not interrupted";
@@ -272,7 +281,7 @@ TEST(SplitPasses, PreviewPassComesFirstAndLeavesNoTrace) {
       EXPECT_FALSE(pass->preview);
       if (pass->done()) break;
     }
-    auto last = view.value()->readFrame(true);
+    auto last = view->readFrame(true);
     ASSERT_TRUE(last.ok());
     EXPECT_EQ(last->stats.spp, plain.stats.spp);
     EXPECT_EQ(last->stats.passes, plain.stats.passes);
@@ -293,15 +302,12 @@ TEST(SplitPasses, PreviewWritesTheBackgroundPerBlockAndTheNextPassInFull) {
   ASSERT_EQ(scene.environment.name, "sky");
   ASSERT_TRUE(scene.environment.visible);
   const Frame plain = render(*renderer, scene);
-  Scene withPreview = scene;
-  withPreview.render.previewPass = true;
-  auto view = renderer->createView();
-  ASSERT_TRUE(view.ok());
-  ASSERT_TRUE(view.value()->setScene(withPreview).ok());
-  auto first = view.value()->renderPass();
+  std::unique_ptr<RenderView> view = previewView(*renderer, scene);
+  ASSERT_TRUE(view);
+  auto first = view->renderPass();
   ASSERT_TRUE(first.ok()) << first.error().message;
   ASSERT_TRUE(first->preview);
-  auto preview = view.value()->readFrame(true);
+  auto preview = view->readFrame(true);
   ASSERT_TRUE(preview.ok());
   // The top 24 rows are sky (the objects sit lower).
   const int w = preview->width;
@@ -320,7 +326,7 @@ TEST(SplitPasses, PreviewWritesTheBackgroundPerBlockAndTheNextPassInFull) {
         highest = std::max<double>(highest, v);
       }
   EXPECT_GT(highest, 1.05 * lowest) << "the sky should vary over the rows";
-  ASSERT_NO_FATAL_FAILURE(expectSameImage(renderUntilDone(*view.value()), plain));
+  ASSERT_NO_FATAL_FAILURE(expectSameImage(renderUntilDone(*view), plain));
 }
 
 Scene furnaceScene(std::shared_ptr<const BrdfDefinition> brdf, int size, int samplesPerFrame, int spp) {
