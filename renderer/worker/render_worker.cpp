@@ -244,6 +244,9 @@ class Worker {
       if (!v) return noView();
       Result<void> done = v->setScene(wire::sceneFromJson(head.at("scene")));
       reply(id, done ? Result<json>(wire::toJson(v->stats())) : Result<json>(done.takeError()));
+    } else if (op == "prepareScene") {
+      if (auto v = view(head)) v->prepareScene(wire::sceneFromJson(head.at("scene")));
+      reply(id, json());
     } else if (op == "renderPass") {
       auto v = view(head);
       if (!v) return noView();

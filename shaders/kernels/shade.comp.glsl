@@ -63,63 +63,12 @@ float brdfa_misEnvironmentFraction(vec3 V, vec3 N, vec3 X, vec3 Y) {
 #endif
 
 void main() {
-  // The dispatch covers a band of 8x8 tiles of the object's screen bounds, starting at the
-  // packed origin; workgroup row y shades the band's tile row (y * step) mod rows, so that the
-  // CPU device's threads each get rows from all over the band (render_view.cpp, renderPass).
-  uint permutation = floatBitsToUint(brdfa_pc.cameraPos.w);
-  // (y * step) mod rows through a float quotient, exact for products below 2^24 (bands of at
-  // most 512 rows): a CPU device divides integers one lane at a time.
-  uint rows = permutation & 0xffffu, product = gl_WorkGroupID.y * (permutation >> 16);
-  uint tileRow = product - rows * uint(float(product) / float(rows));
-  // A preview pass (target.w bit 1, RenderSettings::previewPass) shades one pixel of each
-  // 2x2 block: invocation q stands for the block at origin + 2q, and its value goes to every
-  // pixel of the block this object covers. The next pass overwrites it.
-  bool preview = (brdfa_pc.target.w & 2u) != 0u;
-  uvec2 base = (preview ? 2u : 1u) * uvec2(gl_GlobalInvocationID.x, tileRow * 8u + gl_LocalInvocationID.y) +
-               uvec2(brdfa_pc.target.z & 0xffffu, brdfa_pc.target.z >> 16);
-  if (base.x >= brdfa_pc.frame.x || base.y >= brdfa_pc.frame.y) return;
-
-  // Bit k: pixel base + (k & 1, k >> 1) is this object's, and is written. A loop, not an if:
-  // a CPU device skips a loop no lane enters, but runs both sides of an if for every lane.
-  uint blockMask = 0u;
-  for (uint k = 0u; k < (preview ? 4u : 0u); ++k) {
-    uvec2 q = base + uvec2(k & 1u, k >> 1u);
-    if (q.x < brdfa_pc.frame.x && q.y < brdfa_pc.frame.y &&
-        brdfa_objectId(brdfa_gSurface(brdfa_pixelIndex(q))) == brdfa_pc.target.x)
-      blockMask |= 1u << k;
-  }
-  uint shaded = blockMask != 0u ? uint(findLSB(blockMask)) : 0u;  // the block's pixel to shade
-  uvec2 p = base + uvec2(shaded & 1u, shaded >> 1u);
-  uint pixel = brdfa_pixelIndex(p);
-  uvec2 surface = brdfa_gSurface(pixel);
-  if (preview ? blockMask == 0u : brdfa_objectId(surface) != brdfa_pc.target.x) return;  // another object, or background
-  if (!preview) blockMask = 1u;
-#if defined(BRDFA_TANGENT_FRAME) || defined(BRDFA_TEXCOORD)
-  uvec4 detail = brdfa_gDetail(pixel);
-  texCoord = uintBitsToFloat(detail.yz);
-#else
-  texCoord = vec2(0.0);  // never read: the BRDF does not name it (brdf_features.cpp)
-#endif
-
-  // The frame is turned into the environment's frame (see lib/environment.glsl), so samples
-  // look the environment up without a per-sample rotation. V is the reverse of the view ray
-  // through this slice's sub-pixel position, where the raster pass found the surface.
-  vec3 N = brdfa_toEnvironment(brdfa_octDecode(surface.y));
-  vec3 V = brdfa_toEnvironment(-brdfa_viewRay(p, brdfa_pc.tone.zw));
-  // guard: interpolated normals near a silhouette can face slightly away from the viewer;
-  // bend N until V is just above the horizon so every BRDF sees a valid outgoing direction.
-  float NdotV = dot(N, V);
-  if (NdotV < 1e-3) N = normalize(N + V * (1e-3 - NdotV));
-  vec3 X, Y;
-#if defined(BRDFA_TANGENT_FRAME)
-  // A missing tangent (detail.w) reads as 0, which brdfa_tangentFrame replaces by a basis from N.
-  vec3 tangent = detail.w != 0u ? vec3(0.0) : brdfa_toEnvironment(brdfa_octDecode(detail.x));
-  brdfa_tangentFrame(N, tangent, (surface.x & BRDFA_LEFT_HANDED) != 0u ? -1.0 : 1.0, X, Y);
-#else
-  // The BRDF never reads X or Y (brdf_features.cpp): any orthonormal frame serves the
-  // isotropic hemisphere samplers, and this one needs no tangent.
-  brdfa_basisFromNormal(N, X, Y);
-#endif
+  bool preview = (brdfa_pc.target.w & 2u) != 0u;  // lib/shade_pixel.glsl
+  uvec2 base, p, surface;
+  uint blockMask;
+  if (!brdfa_shadedPixel(preview, base, blockMask, p, surface)) return;
+  vec3 N, V, X, Y;
+  brdfa_surfaceFrame(p, surface, N, V, X, Y);
 #if defined(BRDFA_LEGACY_RENDER)
   // render()'s worldToLocal, built as the BRDFA Engine built it (Mohido/BRDFA_Engine,
   // BRDFA_Engine/shaders/main.frag at commit 97f1b36eb3b864d242055928a29cc76c31274a5b):
@@ -243,14 +192,6 @@ void main() {
   float intensity = brdfa_environmentIntensity();
   vec4 valueA = vec4((sumAll - sumB) * intensity, float(keptAll - keptB));
   vec4 valueB = vec4(sumB * intensity, float(keptB));
-  // The first pass after a restart overwrites this pixel's halves instead of adding, so a
-  // change of BRDF or parameters needs no clear of the whole buffer; a preview overwrites too.
-  bool overwrite = brdfa_pc.target.w != 0u;
-  for (uint k = 0u; k < (preview ? 4u : 1u); ++k) {
-    if ((blockMask & (1u << k)) == 0u) continue;
-    uint written = brdfa_pixelIndex(base + uvec2(k & 1u, k >> 1u));
-    brdfa_accumulate(0u, written, valueA, overwrite);
-    brdfa_accumulate(1u, written, valueB, overwrite);
-  }
+  brdfa_writeShaded(base, blockMask, preview, valueA, valueB);
   if (dropped != 0u) atomicAdd(brdfa_nanSamples, dropped);
 }

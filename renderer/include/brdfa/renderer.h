@@ -159,6 +159,10 @@ class RenderView {
   // leaves spp above it, done; target_error likewise). A change of parameter values only never recompiles. An
   // identical scene changes nothing. On error the previous scene stays in place.
   virtual Result<void> setScene(const Scene& scene) = 0;
+  // Builds what setScene(scene) will need (its programs) without waiting for a pass in flight:
+  // a setScene that follows finds them built. Optional (setScene builds whatever is missing,
+  // and reports what fails). Never changes the view.
+  virtual void prepareScene(const Scene& scene) { (void)scene; }
 
   // Renders one progressive pass of render.samples_per_frame samples per pixel: fewer in the
   // first passes after a restart (1, 2, 4, ...) and when max_samples is near. Does nothing once

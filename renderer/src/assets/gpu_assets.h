@@ -3,6 +3,7 @@
 
 #include <vulkan/vulkan.h>
 
+#include <atomic>
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -71,6 +72,9 @@ struct ShadeKernel {
   uint64_t programHash = 0;  // hash of the assembled source: identifies the compiled program
   uint64_t spirvBytes = 0;   // size of its SPIR-V (what specialization saves shows here)
   MemoryReservation memory;  // its share of the renderer's memory budget
+  // A submission that dispatched it has completed: the driver's compile, which a CPU device
+  // does at the first dispatch, is behind it (RendererImpl::compilesAtFirstDispatch).
+  mutable std::atomic<bool> dispatched{false};
 };
 
 // Push constants of every compute kernel; mirrors BrdfaPush in shaders/lib/bindings.glsl.

@@ -311,6 +311,12 @@ class RemoteRenderer : public Renderer, public std::enable_shared_from_this<Remo
     return e;
   }
 
+  // Every one of `programs` built within budget before (the worker has them, barring a restart).
+  bool allBuilt(const std::vector<std::string>& programs) {
+    std::lock_guard lock(mutex_);
+    return std::all_of(programs.begin(), programs.end(), [&](const std::string& p) { return built_.count(p) > 0; });
+  }
+
   // Programs that built (setScene) or ran a pass within budget: not blamed for a later overrun
   // of that kind.
   void noteProven(Budget budget, const std::vector<std::string>& programs) {
@@ -726,10 +732,23 @@ Result<wire::Message> RemoteView::viewCall(json head, Budget budget, const Scene
 }
 
 Result<void> RemoteView::setScene(const Scene& scene) {
-  std::lock_guard lock(mutex_);
   for (const SceneObject& o : scene.objects)
     if (!o.brdf) return makeError(ErrorCode::InvalidArgument, "an object has no BRDF");
   ScenePrograms programs = programsOf(scene);
+  if (!r_->allBuilt(programs.keys)) {
+    // A BRDF new to the worker: it builds the programs before the view's lock, which a pass in
+    // flight holds, meanwhile (RenderView::prepareScene), under the build budget, and the
+    // setScene below finds them. A view not in the current worker ignores it. (A camera move
+    // or a slider skips the round trip: its programs are built.)
+    Call c;
+    c.head = json{{"op", "prepareScene"}, {"view", id_}, {"scene", wire::toJson(scene)}};
+    c.budget = Budget::Build;
+    c.view = id_;
+    c.programs = programs.keys;
+    c.names = programs.names;
+    (void)r_->request(std::move(c));
+  }
+  std::lock_guard lock(mutex_);
   auto m = viewCall(json{{"op", "setScene"}, {"scene", wire::toJson(scene)}}, Budget::Build, programs);
   if (!m) return m.takeError();
   scene_ = scene;

@@ -41,6 +41,10 @@ constexpr double kTail = 1.25;     // a pass's last submission may take this man
 // against 35 ms in one).
 constexpr uint64_t kInteractivePasses = 3;
 constexpr double kInteractiveSplits = 4;
+// A restart of `render` begins with a preview pass (RenderSettings::previewPass).
+bool wantsPreview(const RenderSettings& render) {
+  return render.previewPass && uint64_t(render.width) * render.height >= RenderSettings::kPreviewMinPixels;
+}
 
 uint32_t groups(uint32_t n, uint32_t size) { return (n + size - 1) / size; }
 
@@ -272,6 +276,21 @@ void RenderViewImpl::releaseObjects(std::vector<ObjectState>& objects) {
   objects.clear();
 }
 
+std::vector<std::shared_ptr<const ShadeKernel>> RenderViewImpl::prebuildKernels(const Scene& scene) {
+  std::vector<std::shared_ptr<const ShadeKernel>> built;
+  auto env = r_->environment(scene.environment.name);
+  if (!env) return built;  // setScene reports it
+  const bool constantEnv = (*env)->constant;
+  for (const SceneObject& so : scene.objects) {
+    auto kernels = r_->shadeKernels(*so.brdf, shadeVariant(*so.brdf, scene.render.sampling, constantEnv), constantEnv,
+                                    wantsPreview(scene.render));
+    if (!kernels) continue;  // buildObjects reports it
+    built.push_back(kernels->kernel);
+    if (kernels->preview) built.push_back(kernels->preview);
+  }
+  return built;
+}
+
 Result<std::vector<RenderViewImpl::ObjectState>> RenderViewImpl::buildObjects(const Scene& scene) {
   VkContext& ctx = r_->ctx();
   const bool constantEnv = env_ && env_->constant;
@@ -285,13 +304,17 @@ Result<std::vector<RenderViewImpl::ObjectState>> RenderViewImpl::buildObjects(co
     const std::string at = "objects[" + std::to_string(i) + "]";
     ObjectState o;
     o.variant = shadeVariant(*so.brdf, scene.render.sampling, constantEnv);
-    auto kernel = r_->shadeKernel(*so.brdf, o.variant, constantEnv);
-    if (!kernel) {
-      Error e = kernel.takeError();
+    // A program not yet run on a device that compiles it at its first dispatch (lavapipe: 250-
+    // 350 ms for a mis program) previews by the preview kernel, whose own compile is a
+    // fraction of that, and compiles in the first pass.
+    auto kernels = r_->shadeKernels(*so.brdf, o.variant, constantEnv, wantsPreview(scene.render));
+    if (!kernels) {
+      Error e = kernels.takeError();
       if (e.field.empty()) e.field = at + ".brdf";
       return fail(std::move(e));
     }
-    o.kernel = kernel.value();
+    o.kernel = kernels->kernel;
+    o.previewKernel = kernels->preview;
     auto mesh = r_->mesh(so.mesh);
     if (!mesh) {
       Error e = mesh.takeError();
@@ -354,6 +377,11 @@ void RenderViewImpl::interruptPass() { interruptRequested_ = true; }
 
 Result<void> RenderViewImpl::setScene(const Scene& scene) {
   BRDFA_TRY(checkScene(scene));
+  // The programs are built (glslang, pipeline) before the view is taken: a pass in flight goes
+  // on meanwhile, to the end of its submission (interruptPass), so a change waits for the
+  // longer of the two instead of both. Held here, the kernels stay in the renderer's cache
+  // for buildObjects.
+  const std::vector<std::shared_ptr<const ShadeKernel>> prebuilt = prebuildKernels(scene);
   std::lock_guard<std::mutex> lock(mutex_);
   interruptRequested_ = false;  // served: this call has the view now
   const uint64_t dropsBefore = r_->memoryUsage().drops;
@@ -450,7 +478,7 @@ Result<void> RenderViewImpl::setScene(const Scene& scene) {
   if (restart) {
     partial_.reset();  // its samples are of the old image
     sizer_.reset();    // the costs of what is drawn now are unmeasured
-    previewPending_ = scene.render.previewPass && uint64_t(width) * height >= RenderSettings::kPreviewMinPixels;
+    previewPending_ = wantsPreview(scene.render);
     const uint64_t version = stats_.sceneVersion;
     stats_ = FrameStats{};
     stats_.sceneVersion = version;
@@ -737,7 +765,8 @@ Result<FrameStats> RenderViewImpl::passLocked(bool interruptible, double frameTa
   // frame of a change arrives quickly.
   const uint64_t ramp = stats_.passes < 20 ? (uint64_t(1) << stats_.passes) : UINT64_MAX;
   // A preview (RenderSettings::previewPass) shades one sample at one pixel of each 2x2
-  // block, over workgroups of 16x16 pixels: `scale` 2.
+  // block, over workgroups of 16x16 pixels: `scale` 2; by the program, or by the preview
+  // kernel where the program has not run yet (buildObjects).
   const bool preview = previewPending_;
   const uint32_t scale = preview ? 2 : 1;
   uint32_t count = preview ? 1
@@ -751,6 +780,12 @@ Result<FrameStats> RenderViewImpl::passLocked(bool interruptible, double frameTa
   const bool refreshError = resumed ? resumed->refreshError
                                     : !preview && stats_.passes >= 1 &&
                                           (sinceErrorMs_ >= kErrorRefreshMs || stats_.spp + count >= maxSamples);
+
+  // Objects whose preview comes from the preview kernel (buildObjects).
+  std::vector<bool> byPreviewKernel(objects_.size(), false);
+  bool previewKernelPass = false;
+  for (size_t i = 0; preview && i < objects_.size(); ++i)
+    previewKernelPass |= byPreviewKernel[i] = objects_[i].previewKernel && !objects_[i].kernel->dispatched;
 
   // Cost in units: one per sample of a covered pixel. An invocation off the object costs next
   // to nothing against a loop-heavy BRDF's sample, the case the split is for; one unit per
@@ -811,6 +846,7 @@ Result<FrameStats> RenderViewImpl::passLocked(bool interruptible, double frameTa
   };
   uint64_t submissions = 0;
   double maxSubmissionMs = 0;
+  std::vector<const ShadeKernel*> bound;  // kernels the submission being recorded dispatches
   do {
     // Slice 0 recorded by an earlier submission (all waited for) is on the host's side now.
     if (targetMs > 0 && !coverageKnown_ && (slicesReady_ & 1u)) measureCoverage();
@@ -873,7 +909,9 @@ Result<FrameStats> RenderViewImpl::passLocked(bool interruptible, double frameTa
       push.target[3] = preview ? 2u : firstPass && done == 0 ? 1u : 0u;
       push.frame[2] = static_cast<uint32_t>(stats_.spp + done);  // the sequence continues across passes
       push.frame[3] = n;
-      vkCmdBindPipeline(cb, VK_PIPELINE_BIND_POINT_COMPUTE, o.kernel->kernel->pipeline());
+      const ShadeKernel& kernel = byPreviewKernel[i] ? *o.previewKernel : *o.kernel;
+      bound.push_back(&kernel);
+      vkCmdBindPipeline(cb, VK_PIPELINE_BIND_POINT_COMPUTE, kernel.kernel->pipeline());
       vkCmdBindDescriptorSets(cb, VK_PIPELINE_BIND_POINT_COMPUTE, layout, 1, 1, &o.set, 0, nullptr);
       // One dispatch per band, its rows permuted: llvmpipe hands each thread one contiguous
       // run of a dispatch's workgroups (lp_cs_tpool: two halves on two cores), and a band's
@@ -930,6 +968,8 @@ Result<FrameStats> RenderViewImpl::passLocked(bool interruptible, double frameTa
                   VK_PIPELINE_STAGE_HOST_BIT, VK_ACCESS_HOST_READ_BIT);
     double ms = 0;
     BRDFA_TRY(cmd_.submitAndWait(&ms, /*viewPass=*/true));
+    for (const ShadeKernel* k : bound) k->dispatched = true;
+    bound.clear();
     clearPending_ = false;
     ++submissions;
     maxSubmissionMs = std::max(maxSubmissionMs, ms);
@@ -975,6 +1015,13 @@ Result<FrameStats> RenderViewImpl::passLocked(bool interruptible, double frameTa
   const double passMs = segmentMs + (resumed ? resumed->ms : 0.0);
   if (preview) {  // counts in no statistic but the render time
     previewPending_ = false;
+    if (previewKernelPass) {
+      // What was learned is the preview kernel's cost: the scene's programs are still to be
+      // compiled (their first submission a warm-up) and measured, as after a change of program.
+      msPerUnit_ = priorMsPerUnit_ = maxUnits_ = 0;
+      warmUp_ = true;
+      for (ObjectState& o : objects_) o.previewKernel.reset();
+    }
     stats_.preview = true;
     stats_.elapsedMs += segmentMs;
     stats_.lastPassMs = passMs;

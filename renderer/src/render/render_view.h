@@ -24,6 +24,7 @@ class RenderViewImpl final : public RenderView {
   Result<void> init();
 
   Result<void> setScene(const Scene& scene) override;
+  void prepareScene(const Scene& scene) override { (void)prebuildKernels(scene); }
   using RenderView::renderPass;
   Result<FrameStats> renderPass(double frameTargetMs) override;
   FrameStats stats() const override;
@@ -33,6 +34,9 @@ class RenderViewImpl final : public RenderView {
  private:
   struct ObjectState {
     std::shared_ptr<const ShadeKernel> kernel;
+    // The preview's program while `kernel` has never run on a device that compiles at the first
+    // dispatch (RendererImpl::shadeKernels); dropped after the preview.
+    std::shared_ptr<const ShadeKernel> previewKernel;
     ShadeVariant variant;  // what the kernel runs, for the stats' estimator and warnings
     std::shared_ptr<const GpuMesh> mesh;
     std::shared_ptr<const GpuTexture> textures[kMaxTextures];  // null: white
@@ -51,6 +55,10 @@ class RenderViewImpl final : public RenderView {
   Result<void> resize(uint32_t width, uint32_t height);
   void writeViewDescriptors();
   Result<std::vector<ObjectState>> buildObjects(const Scene& scene);
+  // The kernels of `scene`'s objects, built or found in the renderer's cache without the view's
+  // lock (errors are left to buildObjects).
+  std::vector<std::shared_ptr<const ShadeKernel>> prebuildKernels(const Scene& scene);
+
   void releaseObjects(std::vector<ObjectState>& objects);
   // Records what a scene change left pending: the raster pass of G-buffer slice 0 and of
   // `slice` into their G-buffer planes; clearing the accumulators and writing the background.

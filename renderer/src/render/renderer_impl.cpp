@@ -9,6 +9,8 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <future>
+#include <optional>
 #include <set>
 #include <sstream>
 #include <thread>
@@ -18,6 +20,7 @@
 #include "remote_renderer.h"
 #include "environment_maps.h"
 #include "environment_sampling.h"
+#include "environment_preview.h"
 #include "meshes.h"
 #include "obj_loader.h"
 #include "worker_process.h"
@@ -385,14 +388,27 @@ Result<std::shared_ptr<const SpirvBinary>> RendererImpl::spirv(ShaderStage stage
   static const std::string compiler = compilerVersion();
   uint64_t key = fnv1a64(source, fnv1a64(compiler) ^ static_cast<uint64_t>(stage));
   {
-    std::lock_guard<std::mutex> lock(spirvMutex_);
+    std::unique_lock<std::mutex> lock(spirvMutex_);
+    spirvDone_.wait(lock, [&] { return !spirvInFlight_.count(key); });
     auto it = spirvCache_.find(key);
     if (it != spirvCache_.end()) {
       if (cached) *cached = true;
       ++spirvCacheHits_;
       return it->second;
     }
+    spirvInFlight_.insert(key);
   }
+  struct InFlight {
+    RendererImpl* r;
+    uint64_t key;
+    ~InFlight() {
+      {
+        std::lock_guard<std::mutex> lock(r->spirvMutex_);
+        r->spirvInFlight_.erase(key);
+      }
+      r->spirvDone_.notify_all();
+    }
+  } inFlight{this, key};
   std::shared_ptr<const SpirvBinary> shared;
   if (auto words = diskCache_->load(key, source.size())) {
     ++spirvDiskHits_;
@@ -484,7 +500,7 @@ AssembledProgram RendererImpl::assembleShadeProgram(const BrdfDefinition& brdf, 
 }
 
 AssembledProgram RendererImpl::assembleShadeProgram(const BrdfDefinition& brdf, const ShadeVariant& variant,
-                                                    bool constantEnv) const {
+                                                    bool constantEnv, bool preview) const {
   // The file's sampler is compiled in only where it is used: its code would otherwise count
   // towards the features the program needs (brdf_features.cpp).
   BrdfDefinition used = brdf;
@@ -500,9 +516,13 @@ AssembledProgram RendererImpl::assembleShadeProgram(const BrdfDefinition& brdf, 
   spec.userChunks.push_back(sources_.get("lib/brdf_inputs.glsl"));
   if (brdf.format == BrdfFormat::Legacy) spec.userChunks.push_back(sources_.get("lib/legacy_inputs.glsl"));
   for (const char* piece : {"lib/bindings.glsl", "lib/gbuffer_encoding.glsl", "lib/random.glsl", "lib/frame.glsl", "lib/sampling.glsl",
-                            "lib/environment.glsl", "lib/environment_sampling.glsl"})
+                            "lib/environment.glsl", "lib/environment_sampling.glsl", "lib/shade_pixel.glsl"})
     spec.commonChunks.push_back(sources_.get(piece));
-  spec.integrator = sources_.get("kernels/shade.comp.glsl");
+  if (preview) {
+    spec.defines.push_back("BRDFA_PREVIEW_LOG2_CELLS " + std::to_string(kPreviewLog2Cells));
+    spec.commonChunks.push_back(sources_.get("lib/environment_preview.glsl"));
+  }
+  spec.integrator = sources_.get(preview ? "kernels/preview.comp.glsl" : "kernels/shade.comp.glsl");
   return assembleProgram(spec);
 }
 
@@ -567,9 +587,33 @@ Result<CompileInfo> RendererImpl::compileBrdf(const BrdfDefinition& brdf) {
   return info;
 }
 
-Result<std::shared_ptr<const ShadeKernel>> RendererImpl::shadeKernel(const BrdfDefinition& brdf,
-                                                                     const ShadeVariant& variant, bool constantEnv) {
-  return compiledKernel(assembleShadeProgram(brdf, variant, constantEnv));
+Result<RendererImpl::ShadeKernels> RendererImpl::shadeKernels(const BrdfDefinition& brdf, const ShadeVariant& variant,
+                                                             bool constantEnv, bool preview) {
+  const AssembledProgram program = assembleShadeProgram(brdf, variant, constantEnv);
+  std::optional<AssembledProgram> previewProgram;
+  std::future<void> previewGlsl;
+  if (preview && compilesAtFirstDispatch() && brdf.format != BrdfFormat::Legacy) {
+    bool run = false;  // built and dispatched: it previews itself
+    {
+      std::lock_guard<std::mutex> lock(kernelMutex_);
+      auto it = kernelCache_.find(program.hash);
+      run = it != kernelCache_.end() && it->second->dispatched;
+    }
+    if (!run) {
+      previewProgram = assembleShadeProgram(brdf, shadeVariant(brdf, SamplingMode::Cosine, constantEnv), constantEnv,
+                                            /*preview=*/true);
+      // Into the SPIR-V cache, beside the kernel's compile (spirv() lets one wait for the other).
+      previewGlsl = std::async(std::launch::async,
+                               [this, source = previewProgram->source] { (void)spirv(ShaderStage::Compute, source, nullptr); });
+    }
+  }
+  auto kernel = compiledKernel(program);
+  if (previewGlsl.valid()) previewGlsl.wait();
+  if (!kernel) return kernel.takeError();
+  ShadeKernels out{kernel.value(), nullptr};
+  if (previewProgram && !out.kernel->dispatched)
+    if (auto built = compiledKernel(*previewProgram)) out.preview = built.value();
+  return out;
 }
 
 Result<int> RendererImpl::preloadFromCache(const BrdfDefinition& brdf) {
@@ -697,7 +741,7 @@ uint64_t hostBytes(const EnvironmentData& e) { return e.texels.size() * sizeof(f
 uint64_t deviceBytes(const EnvironmentData& e) {
   const uint64_t cube = uint64_t(e.faceSize) * e.faceSize * 6 * 4 * sizeof(uint16_t);  // RGBA16F
   // The sampling table, on the device and again on the host (EnvironmentDistribution).
-  const uint64_t table = e.constant ? 0 : 2 * (6ull * kMaxCellsPerEdge * kMaxCellsPerEdge + 1) * 8;
+  const uint64_t table = e.constant ? 0 : (2 * (6ull * kMaxCellsPerEdge * kMaxCellsPerEdge + 1) + kPreviewEntries) * 8;
   return cube + table;
 }
 
@@ -787,12 +831,17 @@ Result<std::shared_ptr<GpuEnvironment>> RendererImpl::uploadEnvironment(const st
   std::shared_ptr<const EnvironmentDistribution> distribution;
   if (!data.constant) {
     // The table is a texel buffer, and Vulkan only promises 65536 texels in one: a device at that
-    // minimum gets coarser cells (6 D^2 + 1 entries must fit).
+    // minimum gets coarser cells (6 D^2 + 1 entries and the preview's must fit).
     uint32_t maxCells = kMaxCellsPerEdge;
-    while (maxCells > 1 && 6ull * maxCells * maxCells + 1 > ctx_->limits().maxTexelBufferElements) maxCells /= 2;
+    while (maxCells > 1 && 6ull * maxCells * maxCells + 1 + kPreviewEntries > ctx_->limits().maxTexelBufferElements)
+      maxCells /= 2;
     distribution = std::make_shared<const EnvironmentDistribution>(buildEnvironmentDistribution(data, maxCells));
   }
   std::vector<uint32_t> table = distribution ? distribution->table : EnvironmentDistribution::constantHeader();
+  if (distribution) {  // the preview kernel's coarse radiance after the cells (environment_preview.h)
+    const std::vector<uint32_t> preview = previewRadianceEntries(data, half.scale);
+    table.insert(table.end(), preview.begin(), preview.end());
+  }
   auto tableBuffer = TexelBuffer::create(*ctx_, table.data(), table.size() * sizeof(uint32_t), VK_FORMAT_R32G32_UINT);
   if (!tableBuffer) return tableBuffer.takeError();
   auto env = std::make_shared<GpuEnvironment>();

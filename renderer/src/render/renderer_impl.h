@@ -8,6 +8,8 @@
 #include <map>
 #include <memory>
 #include <mutex>
+#include <set>
+#include <condition_variable>
 #include <unordered_map>
 
 #include "brdfa/renderer.h"
@@ -100,10 +102,22 @@ class RendererImpl final : public Renderer, public std::enable_shared_from_this<
   Result<std::shared_ptr<const GpuTexture>> texture(const std::string& name, bool srgb);
   // Binds `textures` (null entries: white) to set 1 bindings 2..5 of `objectSet`.
   void writeTextures(VkDescriptorSet objectSet, const std::shared_ptr<const GpuTexture> (&textures)[kMaxTextures]) const;
-  // The shading kernel for `brdf` in this variant; compiled once, then served from the cache.
-  // `variant` is shadeVariant(brdf, sampling, constantEnv), which the caller keeps for its stats.
-  Result<std::shared_ptr<const ShadeKernel>> shadeKernel(const BrdfDefinition& brdf, const ShadeVariant& variant,
-                                                         bool constantEnv);
+  // The shading kernel for `brdf` in this variant, compiled once, then served from the cache
+  // (`variant` is shadeVariant(brdf, sampling, constantEnv), which the caller keeps for its
+  // stats); and, where `preview` is asked for (RenderSettings::previewPass) and
+  // that kernel has never been dispatched on a device that compiles at the first dispatch, the
+  // preview kernel (shaders/kernels/preview.comp.glsl): a small program whose preview is on
+  // screen while the kernel compiles in the first pass. Its GLSL compiles on another compile
+  // worker beside the kernel's. It is an optimisation: null where it does not apply (BRDFA
+  // Engine files, whose render() is not a BRDF, too) or cannot be built.
+  struct ShadeKernels {
+    std::shared_ptr<const ShadeKernel> kernel, preview;
+  };
+  Result<ShadeKernels> shadeKernels(const BrdfDefinition& brdf, const ShadeVariant& variant, bool constantEnv,
+                                    bool preview);
+  // The device compiles a pipeline at its first dispatch (a CPU device: lavapipe's JIT), so a
+  // kernel's first submission carries its compile; a GPU driver compiles at pipeline creation.
+  bool compilesAtFirstDispatch() const { return ctx_->info().type == "cpu"; }
 
  private:
   RendererImpl() = default;
@@ -119,7 +133,9 @@ class RendererImpl final : public Renderer, public std::enable_shared_from_this<
   Result<std::shared_ptr<const SpirvBinary>> spirv(ShaderStage stage, const std::string& source, bool* cached,
                                                    bool compileOnMiss = true);
   AssembledProgram assembleShadeProgram(const BrdfDefinition& brdf, SamplingMode sampling, bool constantEnv) const;
-  AssembledProgram assembleShadeProgram(const BrdfDefinition& brdf, const ShadeVariant& variant, bool constantEnv) const;
+  // `preview`: kernels/preview.comp.glsl in place of the integrator (previewKernel).
+  AssembledProgram assembleShadeProgram(const BrdfDefinition& brdf, const ShadeVariant& variant, bool constantEnv,
+                                        bool preview = false) const;
   // A check kernel (kernels/<kernel>) specialized to `brdf`.
   AssembledProgram assembleCheckProgram(const BrdfDefinition& brdf, const char* kernel) const;
   // Runs a check kernel once per entry of `settings` over `invocations` invocations with an
@@ -163,6 +179,11 @@ class RendererImpl final : public Renderer, public std::enable_shared_from_this<
   bool hostResolve_ = false;
 
   std::mutex spirvMutex_;
+  // Programs being compiled: a second request for one waits for it instead of compiling it too
+  // (two sessions setting the same new BRDF; a view's prebuild, which compiles its programs at
+  // once, and buildObjects).
+  std::set<uint64_t> spirvInFlight_;
+  std::condition_variable spirvDone_;
   std::unordered_map<uint64_t, std::shared_ptr<const SpirvBinary>> spirvCache_;
   std::unordered_map<uint64_t, MemoryReservation> spirvMemory_;  // what each entry above holds
   std::deque<uint64_t> spirvOrder_;  // insertion order, for a bounded cache

@@ -1,0 +1,227 @@
+// The preview kernel (RendererImpl::shadeKernels, shaders/kernels/preview.comp.glsl): where the
+// device compiles a pipeline at its first dispatch (lavapipe), a new program's preview comes from
+// a small kernel, one cosine sample per 2x2 block over the coarse environment
+// (environment_preview.h), while the program itself compiles in the first pass. The preview
+// must be the integral it claims (exactly 1 for a white Lambertian in the furnace, the
+// converged image's level under the sky with its sun far above 1) and leave no trace in the
+// image that follows; the two programs compile once each, and a program that has run previews
+// itself.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdio>
+#include <vector>
+
+#include "brdfa/renderer.h"
+#include "device_test.h"
+#include "environment_preview.h"
+
+namespace brdfa {
+namespace {
+
+std::shared_ptr<Renderer> freshRenderer() {
+  RendererOptions options;
+  options.shaderDir = std::string(BRDFA_SOURCE_DIR) + "/shaders";
+  auto r = Renderer::create(options);
+  EXPECT_TRUE(r.ok()) << (r.ok() ? "" : r.error().message);
+  return r.ok() ? r.value() : nullptr;
+}
+
+// One sphere under `environment` (not seen), mis, with a preview, 256x256 (kPreviewMinPixels).
+Scene sphereScene(std::shared_ptr<const BrdfDefinition> brdf, const std::string& environment, int maxSamples) {
+  Scene s;
+  s.environment.name = environment;
+  s.environment.visible = false;
+  s.render.width = s.render.height = 256;
+  s.render.samplesPerFrame = 8;
+  s.render.maxSamples = maxSamples;
+  s.render.previewPass = true;
+  SceneObject o;
+  o.brdf = std::move(brdf);
+  s.objects.push_back(o);
+  return s;
+}
+
+std::unique_ptr<RenderView> viewOf(Renderer& renderer, const Scene& scene) {
+  auto view = renderer.createView();
+  EXPECT_TRUE(view.ok());
+  if (!view.ok()) return nullptr;
+  auto set = view.value()->setScene(scene);
+  EXPECT_TRUE(set.ok()) << (set.ok() ? "" : set.error().message);
+  return set.ok() ? std::move(view.value()) : nullptr;
+}
+
+// The first pass, which must be the preview, read as linear radiance.
+Frame previewOf(RenderView& view) {
+  auto pass = view.renderPass();
+  EXPECT_TRUE(pass.ok());
+  EXPECT_TRUE(pass.ok() && pass->preview);
+  EXPECT_TRUE(pass.ok() && pass->spp == 0);
+  auto frame = view.readFrame(true);
+  EXPECT_TRUE(frame.ok());
+  return frame.ok() ? frame.value() : Frame{};
+}
+
+float red(const Frame& f, int x, int y) { return f.rgba32f[4 * (size_t(y) * f.width + x)]; }
+
+// 2x2 blocks all of whose pixels `f` shows lit (inside the object in the preview's G-buffer
+// slice), and of those, the ones whose four pixels are not all equal.
+void countBlocks(const Frame& f, size_t& inside, size_t& varying) {
+  inside = varying = 0;
+  for (int y = 0; y + 1 < f.height; y += 2)
+    for (int x = 0; x + 1 < f.width; x += 2) {
+      const float v = red(f, x, y);
+      if (v <= 0 || red(f, x + 1, y) <= 0 || red(f, x, y + 1) <= 0 || red(f, x + 1, y + 1) <= 0) continue;
+      ++inside;
+      varying += red(f, x + 1, y) != v || red(f, x, y + 1) != v || red(f, x + 1, y + 1) != v;
+    }
+}
+
+bool cpuDevice(Renderer& r) { return r.device().type == "cpu"; }
+
+TEST(PreviewKernel, ANewProgramsPreviewIsExactInTheFurnaceAndLeavesNoTrace) {
+  auto renderer = freshRenderer();
+  ASSERT_TRUE(renderer);
+  if (!cpuDevice(*renderer)) GTEST_SKIP() << "a GPU compiles at pipeline creation: no preview kernel";
+  const Scene scene = sphereScene(inlineBrdf(kWhiteLambert), "furnace", 24);
+  const RendererCounters c0 = renderer->counters();
+  std::unique_ptr<RenderView> view = viewOf(*renderer, scene);
+  ASSERT_TRUE(view);
+  // The program and its preview kernel, each compiled once (their GLSL side by side).
+  EXPECT_EQ(renderer->counters().pipelinesCreated, c0.pipelinesCreated + 2);
+  EXPECT_EQ(renderer->counters().glslCompiles, c0.glslCompiles + 2);
+  const Frame preview = previewOf(*view);
+  const Frame last = renderUntilDone(*view);
+  EXPECT_EQ(renderer->counters().pipelinesCreated, c0.pipelinesCreated + 2);
+  EXPECT_EQ(renderer->counters().glslCompiles, c0.glslCompiles + 2);
+
+  // The same image without a preview (the program is built now: no preview kernel either way).
+  Scene plainScene = scene;
+  plainScene.render.previewPass = false;
+  std::unique_ptr<RenderView> plain = viewOf(*renderer, plainScene);
+  ASSERT_TRUE(plain);
+  const Frame reference = renderUntilDone(*plain);
+  ASSERT_EQ(last.rgba32f.size(), reference.rgba32f.size());
+  for (size_t i = 0; i < reference.rgba32f.size(); ++i)
+    ASSERT_NEAR(last.rgba32f[i], reference.rgba32f[i], 1e-5f * std::max(1.0f, std::abs(reference.rgba32f[i])))
+        << "value " << i;
+
+  // White Lambertian, cosine directions, furnace: every sample is exactly 1, so every object
+  // pixel of the preview is (edge pixels mix in the black background at the end, not here).
+  size_t ones = 0;
+  for (size_t i = 0; i < reference.rgba32f.size(); i += 4) {
+    if (std::abs(reference.rgba32f[i] - 1.0f) > 1e-5f) continue;
+    ++ones;
+    for (int c = 0; c < 3; ++c) ASSERT_NEAR(preview.rgba32f[i + c], 1.0f, 1e-5f) << "pixel " << i / 4;
+  }
+  EXPECT_GT(ones, 20000u);
+}
+
+// Under the sky (a sun far above 1) the preview is one sample per 2x2 block of the same
+// integral over the coarse environment: the mean over the sphere of previews of new programs
+// (the same BRDF, a comment apart: each previews by the preview kernel) is the converged
+// image's. One preview alone is too noisy for that: ~30 of its samples meet the sun. A view of a
+// program that has run previews by the program and builds nothing.
+TEST(PreviewKernel, ItsPreviewsUnderTheSkyHaveTheConvergedLevel) {
+  auto renderer = freshRenderer();
+  ASSERT_TRUE(renderer);
+  if (!cpuDevice(*renderer)) GTEST_SKIP() << "a GPU compiles at pipeline creation: no preview kernel";
+  for (const char* name : {"lambert", "ggx"}) {
+    SCOPED_TRACE(name);
+    const std::string text = readSourceFile(std::string("shaders/brdfs/") + name + ".brdf");
+    std::unique_ptr<RenderView> reference = viewOf(*renderer, sphereScene(inlineBrdf(text), "sky", 512));
+    ASSERT_TRUE(reference);
+    const Frame converged = renderUntilDone(*reference);
+    double convergedSum = 0;
+    for (size_t i = 0; i < converged.rgba32f.size(); i += 4)
+      for (int c = 0; c < 3; ++c) convergedSum += converged.rgba32f[i + c];
+
+    constexpr int kPreviews = 16;
+    double previewSum = 0, brightest = 0;
+    for (int k = 0; k < kPreviews; ++k) {
+      const uint64_t before = renderer->counters().pipelinesCreated;
+      std::string edited = text;
+      edited.insert(edited.find("::end shader"), "// preview " + std::to_string(k) + "\n");
+      auto brdf = inlineBrdf(edited);
+      Scene scene = sphereScene(brdf, "sky", 512);
+      scene.render.seed = 1000 + k;
+      std::unique_ptr<RenderView> view = viewOf(*renderer, scene);
+      ASSERT_TRUE(view);
+      ASSERT_EQ(renderer->counters().pipelinesCreated, before + 2) << "a new program and its preview kernel";
+      const Frame preview = previewOf(*view);
+      for (size_t i = 0; i < preview.rgba32f.size(); i += 4)
+        for (int c = 0; c < 3; ++c) {
+          previewSum += preview.rgba32f[i + c];
+          brightest = std::max<double>(brightest, preview.rgba32f[i + c]);
+        }
+      size_t inside = 0, varying = 0;
+      countBlocks(preview, inside, varying);
+      EXPECT_GT(inside, 4000u);
+      EXPECT_EQ(varying, 0u) << "one value per 2x2 block";
+    }
+    EXPECT_GT(brightest, 5.0) << "samples that meet the sun far above 1";
+    std::printf("%s: mean of %d previews / converged = %.4f, brightest preview value %.1f\n", name, kPreviews,
+                previewSum / kPreviews / convergedSum, brightest);
+    EXPECT_NEAR(previewSum / kPreviews / convergedSum, 1.0, 0.06);
+
+    const RendererCounters before = renderer->counters();
+    std::unique_ptr<RenderView> again = viewOf(*renderer, sphereScene(inlineBrdf(text), "sky", 512));
+    ASSERT_TRUE(again);
+    EXPECT_EQ(renderer->counters().pipelinesCreated, before.pipelinesCreated);
+    const Frame byProgram = previewOf(*again);
+    size_t inside = 0, varying = 0;
+    countBlocks(byProgram, inside, varying);
+    EXPECT_GT(inside, 4000u);
+    EXPECT_EQ(varying, 0u);
+  }
+}
+
+// Per cell the solid-angle-weighted mean radiance, divided by the cube's scale, in half floats:
+// the cells times their solid angles hold the map's integral, a bright texel's energy included.
+TEST(EnvironmentPreview, CellsHoldTheMapsIntegralAtTheCubesScale) {
+  for (uint32_t size : {64u, 4u}) {  // more texels than cells, and fewer
+    SCOPED_TRACE("face size " + std::to_string(size));
+    EnvironmentData env;
+    env.faceSize = size;
+    env.texels.resize(size_t(6) * size * size * 4);
+    uint32_t state = 12345;
+    double integral[3] = {0, 0, 0};
+    for (size_t t = 0; t < env.texels.size() / 4; ++t) {
+      for (int c = 0; c < 3; ++c) {
+        state = state * 1664525u + 1013904223u;
+        env.texels[4 * t + c] = float(state >> 8) / 16777216.0f * (c + 1);
+      }
+      env.texels[4 * t + 3] = 1;
+    }
+    env.texels[4 * (size * size * 2 + 1)] = 4.0e5f;  // a sun on +Y, far above the half range
+    for (size_t t = 0; t < env.texels.size() / 4; ++t)
+      for (int c = 0; c < 3; ++c)
+        integral[c] += env.texels[4 * t + c] * cubeTexelSolidAngle(t % size, (t / size) % size, size);
+    const float scale = 8.0f;  // what packHalfCube picks for 4e5
+    const std::vector<uint32_t> entries = previewRadianceEntries(env, scale);
+    ASSERT_EQ(entries.size(), 2 * size_t(kPreviewEntries));
+    const uint32_t P = kPreviewCellsPerEdge;
+    auto halfToFloat = [](uint32_t h) {
+      const uint32_t sign = h >> 15, exponent = (h >> 10) & 31, mantissa = h & 1023;
+      const float magnitude = exponent == 0 ? std::ldexp(float(mantissa), -24)
+                                            : std::ldexp(float(mantissa | 1024), int(exponent) - 25);
+      return sign ? -magnitude : magnitude;
+    };
+    double cells[3] = {0, 0, 0};
+    for (uint32_t cell = 0; cell < kPreviewEntries; ++cell) {
+      const uint32_t x = cell % P, y = (cell / P) % P;
+      // A cell's solid angle: its (s, t) square on the face, as the texels of a P-texel face.
+      const double omega = cubeTexelSolidAngle(x, y, P);
+      const float rgb[3] = {halfToFloat(entries[2 * cell] & 0xffff), halfToFloat(entries[2 * cell] >> 16),
+                            halfToFloat(entries[2 * cell + 1] & 0xffff)};
+      for (int c = 0; c < 3; ++c) cells[c] += rgb[c] * scale * omega;
+    }
+    // A cell is the mean of whole texels (64: 4x4 of them), or lies inside one texel (4: each
+    // texel covers 4x4 cells): either way the cells tile the texels, and the integral holds to
+    // half-float rounding.
+    for (int c = 0; c < 3; ++c) EXPECT_NEAR(cells[c] / integral[c], 1.0, 2e-3) << "channel " << c;
+  }
+}
+
+}  // namespace
+}  // namespace brdfa
