@@ -105,8 +105,11 @@ Result<void> Session::applyScene(std::unique_lock<std::mutex>& updateLock, const
   if (!applied) return applied;
   initializer_ = nullptr;  // an explicit scene supersedes a pending default
   initPending_ = false;
-  FrameStats fresh = withViewPriority([&] { return view_->stats(); });
-  {
+  // The session takes the new scene before the render thread may go on (pendingViewCalls_):
+  // else it could start the pass after the preview before publishRequested_ is set, and a new
+  // program's first frame would wait for that pass (the program's JIT, ~300 ms on lavapipe).
+  withViewPriority([&] {
+    FrameStats fresh = view_->stats();
     std::lock_guard lock(mutex_);
     hasScene_ = true;
     lastActive_ = Clock::now();
@@ -122,7 +125,7 @@ Result<void> Session::applyScene(std::unique_lock<std::mutex>& updateLock, const
     // being read or encoded still reaches those: while a user drags the camera, every frame is
     // one change behind by the time it is encoded, and dropping them left ~2 frames/s.
     latest_.png.reset();
-  }
+  });
   wake_.notify_all();
   progress_.notify_all();
   return {};
@@ -352,7 +355,9 @@ void Session::renderLoop() {
       wake_.wait(lock);
       continue;
     }
-    if (wantPass) {
+    // A preview not yet shown is read first: the pass after it can be long (a new program's
+    // first, with the driver's compile).
+    if (wantPass && !(wantPublish && stats_.preview)) {
       uint64_t versionBefore = stats_.sceneVersion;
       const uint64_t sppBefore = stats_.spp, passesBefore = stats_.passes;
       const bool previewBefore = stats_.preview;
