@@ -56,20 +56,9 @@ void main() {
   }
   float intensity = brdfa_environmentIntensity();
   vec4 valueA = vec4((sumAll - sumB) * intensity, float(keptAll - keptB)), valueB = vec4(sumB * intensity, float(keptB));
-  if (c0) {
-    brdfa_accumStore(0u, i0, valueA);
-    brdfa_accumStore(1u, i0, valueB);
-  }
-  if (c1) {
-    brdfa_accumStore(0u, i1, valueA);
-    brdfa_accumStore(1u, i1, valueB);
-  }
-  if (c2) {
-    brdfa_accumStore(0u, i2, valueA);
-    brdfa_accumStore(1u, i2, valueB);
-  }
-  if (c3) {
-    brdfa_accumStore(0u, i3, valueA);
-    brdfa_accumStore(1u, i3, valueB);
-  }
+  // Straight-line stores, no loop over the block (see above).
+  if (c0) brdfa_storeHalves(i0, valueA, valueB);
+  if (c1) brdfa_storeHalves(i1, valueA, valueB);
+  if (c2) brdfa_storeHalves(i2, valueA, valueB);
+  if (c3) brdfa_storeHalves(i3, valueA, valueB);
 }

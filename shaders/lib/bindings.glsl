@@ -65,6 +65,11 @@ uvec2 brdfa_gSurface(uint i) { return texelFetch(brdfa_gSurfaceTexels, int(i)).x
 uvec4 brdfa_gDetail(uint i) { return texelFetch(brdfa_gDetailTexels, int(i)); }
 vec4 brdfa_accumLoad(uint halfIndex, uint pixel) { return brdfa_accum[brdfa_halfOffset(halfIndex) + pixel]; }
 void brdfa_accumStore(uint halfIndex, uint pixel, vec4 value) { brdfa_accum[brdfa_halfOffset(halfIndex) + pixel] = value; }
+// Overwrites both halves' texels of `pixel`.
+void brdfa_storeHalves(uint pixel, vec4 valueA, vec4 valueB) {
+  brdfa_accumStore(0u, pixel, valueA);
+  brdfa_accumStore(1u, pixel, valueB);
+}
 // Adds `value` to a half's texel, or overwrites it on the first pass after a restart (so a
 // change of BRDF or parameters needs no clear of the whole buffer).
 void brdfa_accumulate(uint halfIndex, uint pixel, vec4 value, bool overwrite) {

@@ -57,6 +57,17 @@ inline Frame renderUntilDone(RenderView& view) {
   return frame.ok() ? frame.value() : Frame{};
 }
 
+// A new view of `renderer` showing `scene`. Null (with the failure reported) when the view or
+// the scene cannot be made.
+inline std::unique_ptr<RenderView> viewWithScene(Renderer& renderer, const Scene& scene) {
+  auto view = renderer.createView();
+  EXPECT_TRUE(view.ok());
+  if (!view.ok()) return nullptr;
+  auto set = view.value()->setScene(scene);
+  EXPECT_TRUE(set.ok()) << (set.ok() ? "" : set.error().message);
+  return set.ok() ? std::move(view.value()) : nullptr;
+}
+
 // A fixture whose suite shares one renderer (the device opens once per suite).
 class DeviceTest : public ::testing::Test {
  protected:

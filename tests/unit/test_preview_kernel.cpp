@@ -42,15 +42,6 @@ Scene sphereScene(std::shared_ptr<const BrdfDefinition> brdf, const std::string&
   return s;
 }
 
-std::unique_ptr<RenderView> viewOf(Renderer& renderer, const Scene& scene) {
-  auto view = renderer.createView();
-  EXPECT_TRUE(view.ok());
-  if (!view.ok()) return nullptr;
-  auto set = view.value()->setScene(scene);
-  EXPECT_TRUE(set.ok()) << (set.ok() ? "" : set.error().message);
-  return set.ok() ? std::move(view.value()) : nullptr;
-}
-
 // The first pass, which must be the preview, read as linear radiance.
 Frame previewOf(RenderView& view) {
   auto pass = view.renderPass();
@@ -85,7 +76,7 @@ TEST(PreviewKernel, ANewProgramsPreviewIsExactInTheFurnaceAndLeavesNoTrace) {
   if (!cpuDevice(*renderer)) GTEST_SKIP() << "a GPU compiles at pipeline creation: no preview kernel";
   const Scene scene = sphereScene(inlineBrdf(kWhiteLambert), "furnace", 24);
   const RendererCounters c0 = renderer->counters();
-  std::unique_ptr<RenderView> view = viewOf(*renderer, scene);
+  std::unique_ptr<RenderView> view = viewWithScene(*renderer, scene);
   ASSERT_TRUE(view);
   // The program and its preview kernel, each compiled once (their GLSL side by side).
   EXPECT_EQ(renderer->counters().pipelinesCreated, c0.pipelinesCreated + 2);
@@ -98,7 +89,7 @@ TEST(PreviewKernel, ANewProgramsPreviewIsExactInTheFurnaceAndLeavesNoTrace) {
   // The same image without a preview (the program is built now: no preview kernel either way).
   Scene plainScene = scene;
   plainScene.render.previewPass = false;
-  std::unique_ptr<RenderView> plain = viewOf(*renderer, plainScene);
+  std::unique_ptr<RenderView> plain = viewWithScene(*renderer, plainScene);
   ASSERT_TRUE(plain);
   const Frame reference = renderUntilDone(*plain);
   ASSERT_EQ(last.rgba32f.size(), reference.rgba32f.size());
@@ -129,7 +120,7 @@ TEST(PreviewKernel, ItsPreviewsUnderTheSkyHaveTheConvergedLevel) {
   for (const char* name : {"lambert", "ggx"}) {
     SCOPED_TRACE(name);
     const std::string text = readSourceFile(std::string("shaders/brdfs/") + name + ".brdf");
-    std::unique_ptr<RenderView> reference = viewOf(*renderer, sphereScene(inlineBrdf(text), "sky", 512));
+    std::unique_ptr<RenderView> reference = viewWithScene(*renderer, sphereScene(inlineBrdf(text), "sky", 512));
     ASSERT_TRUE(reference);
     const Frame converged = renderUntilDone(*reference);
     double convergedSum = 0;
@@ -145,7 +136,7 @@ TEST(PreviewKernel, ItsPreviewsUnderTheSkyHaveTheConvergedLevel) {
       auto brdf = inlineBrdf(edited);
       Scene scene = sphereScene(brdf, "sky", 512);
       scene.render.seed = 1000 + k;
-      std::unique_ptr<RenderView> view = viewOf(*renderer, scene);
+      std::unique_ptr<RenderView> view = viewWithScene(*renderer, scene);
       ASSERT_TRUE(view);
       ASSERT_EQ(renderer->counters().pipelinesCreated, before + 2) << "a new program and its preview kernel";
       const Frame preview = previewOf(*view);
@@ -165,7 +156,7 @@ TEST(PreviewKernel, ItsPreviewsUnderTheSkyHaveTheConvergedLevel) {
     EXPECT_NEAR(previewSum / kPreviews / convergedSum, 1.0, 0.06);
 
     const RendererCounters before = renderer->counters();
-    std::unique_ptr<RenderView> again = viewOf(*renderer, sphereScene(inlineBrdf(text), "sky", 512));
+    std::unique_ptr<RenderView> again = viewWithScene(*renderer, sphereScene(inlineBrdf(text), "sky", 512));
     ASSERT_TRUE(again);
     EXPECT_EQ(renderer->counters().pipelinesCreated, before.pipelinesCreated);
     const Frame byProgram = previewOf(*again);

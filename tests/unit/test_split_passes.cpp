@@ -69,12 +69,7 @@ void expectSameImage(const Frame& got, const Frame& want) {
 // (with the failure reported) when the view or the scene cannot be made.
 std::unique_ptr<RenderView> previewView(Renderer& renderer, Scene scene) {
   scene.render.previewPass = true;
-  auto view = renderer.createView();
-  EXPECT_TRUE(view.ok());
-  if (!view.ok()) return nullptr;
-  auto set = view.value()->setScene(scene);
-  EXPECT_TRUE(set.ok()) << (set.ok() ? "" : set.error().message);
-  return set.ok() ? std::move(view.value()) : nullptr;
+  return viewWithScene(renderer, scene);
 }
 
 // Two objects with different BRDFs and overlapping bounds, in a visible, non-constant
