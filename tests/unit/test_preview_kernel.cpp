@@ -167,6 +167,36 @@ TEST(PreviewKernel, ItsPreviewsUnderTheSkyHaveTheConvergedLevel) {
   }
 }
 
+// At GGX's roughness extremes (a near-mirror's D of ~1e5 at the peak, and the widest lobe) and
+// with the sun far above 1, the preview kernel's preview is finite and non-negative everywhere,
+// and lights the sphere.
+TEST(PreviewKernel, ItsPreviewAtRoughnessExtremesIsFiniteAndLit) {
+  auto renderer = freshRenderer();
+  ASSERT_TRUE(renderer);
+  if (!cpuDevice(*renderer)) GTEST_SKIP() << "a GPU compiles at pipeline creation: no preview kernel";
+  for (float roughness : {0.001f, 1.0f}) {
+    SCOPED_TRACE("roughness " + std::to_string(roughness));
+    Scene scene = sphereScene(builtin("ggx"), "sky", 1);
+    scene.objects[0].params["roughness"] = {roughness, 0, 0};
+    const uint64_t before = renderer->counters().pipelinesCreated;
+    std::unique_ptr<RenderView> view = viewWithScene(*renderer, scene);
+    ASSERT_TRUE(view);
+    // The program and its preview kernel, built for the first roughness; the program never
+    // runs here (previews only), so the second is previewed by the same preview kernel.
+    ASSERT_EQ(renderer->counters().pipelinesCreated, before + (roughness < 0.5f ? 2 : 0));
+    const Frame preview = previewOf(*view);
+    size_t lit = 0;
+    for (size_t i = 0; i < preview.rgba32f.size(); i += 4) {
+      for (int c = 0; c < 3; ++c) {
+        ASSERT_TRUE(std::isfinite(preview.rgba32f[i + c])) << "pixel " << i / 4;
+        ASSERT_GE(preview.rgba32f[i + c], 0.0f) << "pixel " << i / 4;
+      }
+      lit += preview.rgba32f[i] > 0;
+    }
+    EXPECT_GT(lit, 10000u);
+  }
+}
+
 // Per cell the solid-angle-weighted mean radiance, divided by the cube's scale, in half floats:
 // the cells times their solid angles hold the map's integral, a bright texel's energy included.
 TEST(EnvironmentPreview, CellsHoldTheMapsIntegralAtTheCubesScale) {
