@@ -276,22 +276,22 @@ void RenderViewImpl::releaseObjects(std::vector<ObjectState>& objects) {
   objects.clear();
 }
 
-std::vector<std::shared_ptr<const ShadeKernel>> RenderViewImpl::prebuildKernels(const Scene& scene) {
-  std::vector<std::shared_ptr<const ShadeKernel>> built;
+std::vector<std::optional<RendererImpl::ShadeKernels>> RenderViewImpl::prebuildKernels(const Scene& scene) {
+  std::vector<std::optional<RendererImpl::ShadeKernels>> built(scene.objects.size());
   auto env = r_->environment(scene.environment.name);
   if (!env) return built;  // setScene reports it
   const bool constantEnv = (*env)->constant;
-  for (const SceneObject& so : scene.objects) {
+  for (size_t i = 0; i < scene.objects.size(); ++i) {
+    const SceneObject& so = scene.objects[i];
     auto kernels = r_->shadeKernels(*so.brdf, shadeVariant(*so.brdf, scene.render.sampling, constantEnv), constantEnv,
                                     wantsPreview(scene.render));
-    if (!kernels) continue;  // buildObjects reports it
-    built.push_back(kernels->kernel);
-    if (kernels->preview) built.push_back(kernels->preview);
+    if (kernels) built[i] = kernels.value();  // else buildObjects asks again and reports it
   }
   return built;
 }
 
-Result<std::vector<RenderViewImpl::ObjectState>> RenderViewImpl::buildObjects(const Scene& scene) {
+Result<std::vector<RenderViewImpl::ObjectState>> RenderViewImpl::buildObjects(
+    const Scene& scene, const std::vector<std::optional<RendererImpl::ShadeKernels>>& prebuilt) {
   VkContext& ctx = r_->ctx();
   const bool constantEnv = env_ && env_->constant;
   std::vector<ObjectState> out;
@@ -307,7 +307,9 @@ Result<std::vector<RenderViewImpl::ObjectState>> RenderViewImpl::buildObjects(co
     // A program not yet run on a device that compiles it at its first dispatch (lavapipe: 250-
     // 350 ms for a mis program) previews by the preview kernel, whose own compile is a
     // fraction of that, and compiles in the first pass.
-    auto kernels = r_->shadeKernels(*so.brdf, o.variant, constantEnv, wantsPreview(scene.render));
+    auto kernels = i < prebuilt.size() && prebuilt[i]
+                       ? Result<RendererImpl::ShadeKernels>(*prebuilt[i])
+                       : r_->shadeKernels(*so.brdf, o.variant, constantEnv, wantsPreview(scene.render));
     if (!kernels) {
       Error e = kernels.takeError();
       if (e.field.empty()) e.field = at + ".brdf";
@@ -379,9 +381,8 @@ Result<void> RenderViewImpl::setScene(const Scene& scene) {
   BRDFA_TRY(checkScene(scene));
   // The programs are built (glslang, pipeline) before the view is taken: a pass in flight goes
   // on meanwhile, to the end of its submission (interruptPass), so a change waits for the
-  // longer of the two instead of both. Held here, the kernels stay in the renderer's cache
-  // for buildObjects.
-  const std::vector<std::shared_ptr<const ShadeKernel>> prebuilt = prebuildKernels(scene);
+  // longer of the two instead of both.
+  const std::vector<std::optional<RendererImpl::ShadeKernels>> prebuilt = prebuildKernels(scene);
   std::lock_guard<std::mutex> lock(mutex_);
   interruptRequested_ = false;  // served: this call has the view now
   const uint64_t dropsBefore = r_->memoryUsage().drops;
@@ -393,7 +394,7 @@ Result<void> RenderViewImpl::setScene(const Scene& scene) {
   }
   auto previousEnv = env_;
   env_ = env.value();  // buildObjects specializes kernels to the environment kind
-  auto built = buildObjects(scene);
+  auto built = buildObjects(scene, prebuilt);
   if (!built) {
     env_ = previousEnv;
     return built.takeError();

@@ -54,10 +54,12 @@ class RenderViewImpl final : public RenderView {
   Result<FrameStats> passLocked(bool interruptible, double frameTargetMs = 0);
   Result<void> resize(uint32_t width, uint32_t height);
   void writeViewDescriptors();
-  Result<std::vector<ObjectState>> buildObjects(const Scene& scene);
-  // The kernels of `scene`'s objects, built or found in the renderer's cache without the view's
-  // lock (errors are left to buildObjects).
-  std::vector<std::shared_ptr<const ShadeKernel>> prebuildKernels(const Scene& scene);
+  // `prebuilt`: prebuildKernels(scene), used where it holds an object's kernels.
+  Result<std::vector<ObjectState>> buildObjects(const Scene& scene,
+                                                const std::vector<std::optional<RendererImpl::ShadeKernels>>& prebuilt);
+  // The kernels of `scene`'s objects, in object order, built or found in the renderer's cache
+  // without the view's lock; nullopt where that failed (buildObjects asks again and reports it).
+  std::vector<std::optional<RendererImpl::ShadeKernels>> prebuildKernels(const Scene& scene);
 
   void releaseObjects(std::vector<ObjectState>& objects);
   // Records what a scene change left pending: the raster pass of G-buffer slice 0 and of
