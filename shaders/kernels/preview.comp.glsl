@@ -46,16 +46,14 @@ void main() {
     vec3 l = brdfa_sampleCosineHemisphere(brdfa_unorm2(u.xy), weight);
     vec3 L = X * l.x + Y * l.y + N * l.z;
     vec3 c = BRDF(L, V, N, X, Y) * brdfa_environmentPreview(L) * weight;
-    // guard: a NaN or infinite channel makes the sum NaN or infinite: the sample is dropped.
-    float channels = c.x + c.y + c.z;
-    if (isnan(channels) || isinf(channels)) continue;
+    if (!brdfa_sampleKept(c)) continue;  // NaN or infinite (lib/shade_pixel.glsl)
     sumAll += c;
     sumB += c * float(h);
     ++keptAll;
     keptB += h;
   }
-  float intensity = brdfa_environmentIntensity();
-  vec4 valueA = vec4((sumAll - sumB) * intensity, float(keptAll - keptB)), valueB = vec4(sumB * intensity, float(keptB));
+  vec4 valueA, valueB;
+  brdfa_halfValues(sumAll, sumB, keptAll, keptB, valueA, valueB);
   // Straight-line stores, no loop over the block (see above).
   if (c0) brdfa_storeHalves(i0, valueA, valueB);
   if (c1) brdfa_storeHalves(i1, valueA, valueB);

@@ -177,10 +177,7 @@ void main() {
     vec3 L = X * l.x + Y * l.y + N * l.z;
     vec3 c = BRDF(L, V, N, X, Y) * brdfa_environmentUnit(L) * weight;
 #endif
-    // guard: a NaN or infinite channel makes the channel sum NaN or infinite, so one test of
-    // the sum drops the sample (a finite sum that overflows float is dropped as infinite too).
-    float channels = c.x + c.y + c.z;
-    if (isnan(channels) || isinf(channels)) {
+    if (!brdfa_sampleKept(c)) {  // NaN or infinite (lib/shade_pixel.glsl)
       ++dropped;
       continue;
     }
@@ -189,9 +186,8 @@ void main() {
     ++keptAll;
     keptB += h;
   }
-  float intensity = brdfa_environmentIntensity();
-  vec4 valueA = vec4((sumAll - sumB) * intensity, float(keptAll - keptB));
-  vec4 valueB = vec4(sumB * intensity, float(keptB));
+  vec4 valueA, valueB;
+  brdfa_halfValues(sumAll, sumB, keptAll, keptB, valueA, valueB);
   brdfa_writeShaded(base, blockMask, preview, valueA, valueB);
   if (dropped != 0u) atomicAdd(brdfa_nanSamples, dropped);
 }

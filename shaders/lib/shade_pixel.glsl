@@ -74,6 +74,23 @@ void brdfa_surfaceFrame(uvec2 p, uvec2 surface, out vec3 N, out vec3 V, out vec3
 #endif
 }
 
+// Whether sample value c is kept. guard: a NaN or infinite channel makes the channel sum NaN or
+// infinite, so one test of the sum drops the sample (a finite sum that overflows float is
+// dropped as infinite too).
+bool brdfa_sampleKept(vec3 c) {
+  float channels = c.x + c.y + c.z;
+  return !(isnan(channels) || isinf(channels));
+}
+
+// The half accumulators' values from the sums of all kept samples and of half B's (half A's is
+// the difference) and their counts: rgb the radiance sums at the environment's intensity, a
+// the samples kept.
+void brdfa_halfValues(vec3 sumAll, vec3 sumB, uint keptAll, uint keptB, out vec4 valueA, out vec4 valueB) {
+  float intensity = brdfa_environmentIntensity();
+  valueA = vec4((sumAll - sumB) * intensity, float(keptAll - keptB));
+  valueB = vec4(sumB * intensity, float(keptB));
+}
+
 // For kernels/shade.comp.glsl: writes a pixel's half sums (rgb: radiance sum, a: samples kept)
 // to every pixel of blockMask. The first pass after a restart overwrites instead of adding, so
 // a change of BRDF or parameters needs no clear of the whole buffer; a preview overwrites too.
