@@ -47,10 +47,7 @@ void main() {
     vec3 L = X * l.x + Y * l.y + N * l.z;
     vec3 c = BRDF(L, V, N, X, Y) * brdfa_environmentPreview(L) * weight;
     if (!brdfa_sampleKept(c)) continue;  // NaN or infinite (lib/shade_pixel.glsl)
-    sumAll += c;
-    sumB += c * float(h);
-    ++keptAll;
-    keptB += h;
+    brdfa_addSample(c, h, sumAll, sumB, keptAll, keptB);
   }
   vec4 valueA, valueB;
   brdfa_halfValues(sumAll, sumB, keptAll, keptB, valueA, valueB);

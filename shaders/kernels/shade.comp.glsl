@@ -181,10 +181,7 @@ void main() {
       ++dropped;
       continue;
     }
-    sumAll += c;
-    sumB += c * float(h);
-    ++keptAll;
-    keptB += h;
+    brdfa_addSample(c, h, sumAll, sumB, keptAll, keptB);
   }
   vec4 valueA, valueB;
   brdfa_halfValues(sumAll, sumB, keptAll, keptB, valueA, valueB);

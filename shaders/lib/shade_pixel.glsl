@@ -82,6 +82,16 @@ bool brdfa_sampleKept(vec3 c) {
   return !(isnan(channels) || isinf(channels));
 }
 
+// Adds kept sample c of half h to the sums of all kept samples and of half B's, and to their
+// counts: no branch or dynamically indexed array per half, which a CPU device turns into
+// per-lane memory.
+void brdfa_addSample(vec3 c, uint h, inout vec3 sumAll, inout vec3 sumB, inout uint keptAll, inout uint keptB) {
+  sumAll += c;
+  sumB += c * float(h);
+  ++keptAll;
+  keptB += h;
+}
+
 // The half accumulators' values from the sums of all kept samples and of half B's (half A's is
 // the difference) and their counts: rgb the radiance sums at the environment's intensity, a
 // the samples kept.
