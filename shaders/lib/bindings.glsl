@@ -43,6 +43,11 @@ layout(set = 0, binding = 11) uniform usamplerBuffer brdfa_gDetailTexels;
 // others), R32UI pixel indices: the edge kernel's work list once every slice is known (CPU
 // devices).
 layout(set = 0, binding = 13) uniform usamplerBuffer brdfa_edgePixels;
+// The preview's hand-over between its three stages (kernels/preview_setup, preview,
+// preview_scatter .comp.glsl): BRDFA_PREVIEW_STRIDE texels per 2x2 block of one dispatch, in
+// invocation order (brdfa_previewSlot). Words, so the bits of a pixel index or mask pass
+// through unchanged.
+layout(std430, set = 0, binding = 12) buffer BrdfaPreviewScratch { uvec4 brdfa_previewScratch[]; };
 
 layout(push_constant) uniform BrdfaPush {
   vec4 cameraPos;      // xyz; w (shade, as uint bits): rows | step << 16 of the dispatch's band
@@ -65,6 +70,12 @@ uvec2 brdfa_gSurface(uint i) { return texelFetch(brdfa_gSurfaceTexels, int(i)).x
 uvec4 brdfa_gDetail(uint i) { return texelFetch(brdfa_gDetailTexels, int(i)); }
 vec4 brdfa_accumLoad(uint halfIndex, uint pixel) { return brdfa_accum[brdfa_halfOffset(halfIndex) + pixel]; }
 void brdfa_accumStore(uint halfIndex, uint pixel, vec4 value) { brdfa_accum[brdfa_halfOffset(halfIndex) + pixel] = value; }
+// The preview scratch's first texel for this invocation: the three stages dispatch the same grid
+// of 8x8 workgroups. (Not gl_WorkGroupSize: this file comes before the kernel's local_size.)
+const uint BRDFA_PREVIEW_STRIDE = 6u;
+uint brdfa_previewSlot() {
+  return (gl_GlobalInvocationID.y * gl_NumWorkGroups.x * 8u + gl_GlobalInvocationID.x) * BRDFA_PREVIEW_STRIDE;
+}
 // Overwrites both halves' texels of `pixel`.
 void brdfa_storeHalves(uint pixel, vec4 valueA, vec4 valueB) {
   brdfa_accumStore(0u, pixel, valueA);

@@ -1,7 +1,8 @@
 // The preview kernel (RendererImpl::shadeKernels, shaders/kernels/preview.comp.glsl): where the
 // device compiles a pipeline at its first dispatch (lavapipe), a new program's preview comes from
 // a small kernel, one cosine sample per 2x2 block over the coarse environment
-// (environment_preview.h), while the program itself compiles in the first pass. The preview
+// (environment_preview.h), while the program itself compiles in the first pass. It runs in three
+// stages, of which only the middle one holds the BRDF, handing over through a scratch buffer. The preview
 // must be the integral it claims (exactly 1 for a white Lambertian in the furnace, the
 // converged image's level under the sky with its sun far above 1) and leave no trace in the
 // image that follows; the two programs compile once each, and a program that has run previews
@@ -106,6 +107,45 @@ TEST(PreviewKernel, ANewProgramsPreviewIsExactInTheFurnaceAndLeavesNoTrace) {
     for (int c = 0; c < 3; ++c) ASSERT_NEAR(preview.rgba32f[i + c], 1.0f, 1e-5f) << "pixel " << i / 4;
   }
   EXPECT_GT(ones, 20000u);
+}
+
+// A preview hands over through a scratch of 65536 blocks (render_view.cpp): an image of 1022x1000
+// (511x500 blocks, rows of workgroups that end mid-group) previews in several dispatches, and two
+// objects side by side, overlapping on screen, share the 2x2 blocks along their outline. In the
+// furnace, white Lambert (Kd 1) and grey (Kd 0.3): every pixel the converged image shows as one
+// object's value (covered in all four G-buffer slices: a pixel covered in some mixes in the
+// black background, 0.75, 0.5 or 0.25, or the other object, 0.475 or 0.825) has that value in
+// the preview, so no block went missing or took the other object's value.
+TEST(PreviewKernel, PreviewsInPiecesAndTwoObjectsSharingBlocksAreExact) {
+  auto renderer = freshRenderer();
+  ASSERT_TRUE(renderer);
+  if (!cpuDevice(*renderer)) GTEST_SKIP() << "a GPU compiles at pipeline creation: no preview kernel";
+  Scene scene = sphereScene(inlineBrdf(kWhiteLambert), "furnace", 16);
+  scene.render.width = 1022;
+  scene.render.height = 1000;
+  scene.objects[0].translate = {-0.8f, 0, 0};
+  SceneObject grey = scene.objects[0];
+  grey.translate = {0.8f, 0, -0.3f};
+  grey.params["Kd"] = {0.3f, 0.3f, 0.3f};
+  scene.objects.push_back(grey);
+  std::unique_ptr<RenderView> view = viewWithScene(*renderer, scene);
+  ASSERT_TRUE(view);
+  const Frame preview = previewOf(*view);
+  const Frame last = renderUntilDone(*view);
+  ASSERT_EQ(preview.rgba32f.size(), last.rgba32f.size());
+  size_t white = 0, greyPixels = 0;
+  for (size_t i = 0; i < last.rgba32f.size(); i += 4) {
+    const float v = last.rgba32f[i];
+    const bool isWhite = std::abs(v - 1.0f) < 1e-5f, isGrey = std::abs(v - 0.3f) < 1e-5f;
+    if (!isWhite && !isGrey) continue;  // background, or an edge mixing slices
+    (isWhite ? white : greyPixels) += 1;
+    for (int c = 0; c < 3; ++c)
+      ASSERT_NEAR(preview.rgba32f[i + c], isWhite ? 1.0f : 0.3f, 1e-5f)
+          << "pixel " << (i / 4) % 1022 << ", " << (i / 4) / 1022;
+  }
+  // Both spheres are large on screen: each covers far more blocks than one dispatch's scratch.
+  EXPECT_GT(white, 4 * 65536u);
+  EXPECT_GT(greyPixels, 4 * 65536u);
 }
 
 // Under the sky (a sun far above 1) the preview is one sample per 2x2 block of the same

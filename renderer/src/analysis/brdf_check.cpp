@@ -182,7 +182,7 @@ Result<void> RendererImpl::runCheckKernel(const BrdfDefinition& brdf, const char
   // Set 0 carries the output in the accumulator binding (3); set 1 the parameter block.
   PoolOwner res;
   res.device = ctx.device();
-  VkDescriptorPoolSize sizes[4] = {{VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 6},
+  VkDescriptorPoolSize sizes[4] = {{VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 7},
                                    {VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, 5},
                                    {VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, 2},
                                    {VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER, 1}};
@@ -209,7 +209,7 @@ Result<void> RendererImpl::runCheckKernel(const BrdfDefinition& brdf, const char
   VkDescriptorImageInfo envInfo{envSampler_, env->cube.view(), VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL};
   const VkBufferView tableView = env->table.view();
   std::vector<VkWriteDescriptorSet> writes;
-  for (uint32_t binding : {0u, 3u, 4u, 6u, 7u, 8u})
+  for (uint32_t binding : {0u, 3u, 4u, 6u, 7u, 8u, 12u})
     writes.push_back({VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET, nullptr, sets[0], binding, 0, 1,
                       VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, nullptr, binding == 0 ? &inInfo : &outInfo, nullptr});
   writes.push_back({VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET, nullptr, sets[0], 9, 0, 1,

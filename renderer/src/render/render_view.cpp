@@ -18,6 +18,10 @@ namespace brdfa {
 namespace {
 
 constexpr uint32_t kShadeGroup = 8;     // local size of shade/background kernels
+// The preview scratch holds at most this many 2x2 blocks (6 MiB; a 512^2 image's in one
+// dispatch): a larger object's preview goes in several.
+constexpr uint32_t kPreviewScratchBlocks = 65536;
+constexpr VkDeviceSize kPreviewScratchBlockBytes = 6 * 16;  // BRDFA_PREVIEW_STRIDE texels
 constexpr uint32_t kResolveGroup = 16;  // local size of the resolve kernel
 constexpr double kErrorRefreshMs = 200; // rel_error is refreshed at least this often while rendering
 // Splitting a pass into submissions (see renderPass). A view's first submission after its
@@ -92,7 +96,7 @@ Result<void> RenderViewImpl::init() {
   cmd_ = std::move(cmd.value());
 
   // New objects are built before the old ones are released, hence room for two scenes' worth.
-  VkDescriptorPoolSize sizes[4] = {{VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 6 * kMaxJitter},
+  VkDescriptorPoolSize sizes[4] = {{VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 7 * kMaxJitter},
                                    {VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, kMaxJitter + 8 * kMaxObjects},
                                    {VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, 4 * kMaxObjects},
                                    {VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER, 4 * kMaxJitter}};
@@ -140,11 +144,20 @@ Result<void> RenderViewImpl::resize(uint32_t width, uint32_t height) {
     return makeError(ErrorCode::InvalidArgument, "a " + std::to_string(width) + "x" + std::to_string(height) +
                                                      " view is more than this device's texel buffers can address");
   const VkDeviceSize detailOffset = aligned(pixels * kGbufferSurfaceBytes);
+  // A preview dispatch over the whole image needs one scratch block per invocation. Only a
+  // device that compiles at the first dispatch runs the preview kernel; elsewhere one block
+  // keeps the binding valid.
+  const uint32_t scratchBlocks =
+      !r_->compilesAtFirstDispatch()
+          ? 1u
+          : std::min<uint32_t>(kPreviewScratchBlocks, groups((width + 1) / 2, kShadeGroup) *
+                                                          groups((height + 1) / 2, kShadeGroup) * kShadeGroup * kShadeGroup);
   const VkDeviceSize stride = aligned(detailOffset + pixels * kGbufferDetailBytes);
   const uint64_t bytes = pixels * (kGbufferSurfaceBytes + kGbufferDetailBytes + 4)  // raster targets and depth
                          + stride * jitter + pixels * 32      // G-buffer copies, accumulators
                          + pixels * (4 + 16) + partialCount(width, height) * 16  // outputs
-                         + pixels * 4;                        // edge list
+                         + pixels * 4                         // edge list
+                         + scratchBlocks * kPreviewScratchBlockBytes;
   // The old size's share is given back in the same step: a refused size leaves the view as it
   // was, still rendering its old size.
   BRDFA_TRY(r_->exchangeViewMemory(reservedBytes_, bytes,
@@ -200,7 +213,7 @@ Result<void> RenderViewImpl::resize(uint32_t width, uint32_t height) {
   // device the host also lists the edge pixels from the G-buffer (listEdgePixels), whichever
   // resolve runs, so both resolves see the same image.
   const bool host = r_->hostResolve() || r_->ctx().info().type == "cpu";
-  const Want wants[6] = {
+  const Want wants[7] = {
       {&gbuffer_, sliceStride_ * jitterCount_,
        storage | VK_BUFFER_USAGE_UNIFORM_TEXEL_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT, host},
       {&accum_, pixels * 2 * 16,
@@ -208,7 +221,8 @@ Result<void> RenderViewImpl::resize(uint32_t width, uint32_t height) {
       {&outRgba8_, pixels * 4, storage, true},
       {&outFloat_, pixels * 16, storage, true},
       {&partials_, VkDeviceSize(partialCount(width, height)) * 16, storage, true},
-      {&edgeList_, pixels * 4, VK_BUFFER_USAGE_UNIFORM_TEXEL_BUFFER_BIT, true}};
+      {&edgeList_, pixels * 4, VK_BUFFER_USAGE_UNIFORM_TEXEL_BUFFER_BIT, true},
+      {&previewScratch_, scratchBlocks * kPreviewScratchBlockBytes, storage, false}};
   for (const Want& w : wants) {
     auto b = Buffer::create(ctx, w.size, w.usage, w.host);
     if (!b) return b.takeError();
@@ -227,6 +241,7 @@ Result<void> RenderViewImpl::resize(uint32_t width, uint32_t height) {
   auto edgeView = TexelView::create(ctx, edgeList_, VK_FORMAT_R32_UINT, 0, VK_WHOLE_SIZE);
   if (!edgeView) return edgeView.takeError();
   edgeView_ = std::move(edgeView.value());
+  previewScratchBlocks_ = scratchBlocks;
   width_ = width;
   height_ = height;
   return {};
@@ -235,20 +250,21 @@ Result<void> RenderViewImpl::resize(uint32_t width, uint32_t height) {
 void RenderViewImpl::writeViewDescriptors() {
   VkDescriptorImageInfo env{r_->environmentSampler(), env_->cube.view(), VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL};
   const VkBufferView table = env_->table.view();
-  const std::pair<uint32_t, const Buffer*> buffers[6] = {{0, &gbuffer_},  {3, &accum_},    {4, &counters_},
-                                                         {6, &outRgba8_}, {7, &outFloat_}, {8, &partials_}};
+  const std::pair<uint32_t, const Buffer*> buffers[7] = {{0, &gbuffer_},  {3, &accum_},    {4, &counters_},
+                                                         {6, &outRgba8_}, {7, &outFloat_}, {8, &partials_},
+                                                         {12, &previewScratch_}};
   const VkDeviceSize sliceBytes = detailOffset_ + VkDeviceSize(width_) * height_ * kGbufferDetailBytes;
   // Every set is written (unused slices alias slice 0) so that no set is ever left invalid.
   for (uint32_t slice = 0; slice < kMaxJitter; ++slice) {
     const uint32_t s = slice < jitterCount_ ? slice : 0;
-    VkDescriptorBufferInfo infos[6];
-    VkWriteDescriptorSet w[11] = {};
-    for (uint32_t i = 0; i < 11; ++i) {
+    VkDescriptorBufferInfo infos[7];
+    VkWriteDescriptorSet w[12] = {};
+    for (uint32_t i = 0; i < 12; ++i) {
       w[i].sType = VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET;
       w[i].dstSet = viewSets_[slice];
       w[i].descriptorCount = 1;
     }
-    for (uint32_t i = 0; i < 6; ++i) {
+    for (uint32_t i = 0; i < 7; ++i) {
       infos[i] = {buffers[i].second->handle(), 0, VK_WHOLE_SIZE};
       w[i].dstBinding = buffers[i].first;
       w[i].descriptorType = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER;
@@ -256,17 +272,17 @@ void RenderViewImpl::writeViewDescriptors() {
     }
     infos[0].offset = s * sliceStride_;
     infos[0].range = sliceBytes;
-    w[6].dstBinding = 5;
-    w[6].descriptorType = VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER;
-    w[6].pImageInfo = &env;
+    w[7].dstBinding = 5;
+    w[7].descriptorType = VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER;
+    w[7].pImageInfo = &env;
     const std::pair<uint32_t, VkBufferView> texels[4] = {
         {9, table}, {10, surfaceViews_[s].view()}, {11, detailViews_[s].view()}, {13, edgeView_.view()}};
     for (uint32_t i = 0; i < 4; ++i) {
-      w[7 + i].dstBinding = texels[i].first;
-      w[7 + i].descriptorType = VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER;
-      w[7 + i].pTexelBufferView = &texels[i].second;
+      w[8 + i].dstBinding = texels[i].first;
+      w[8 + i].descriptorType = VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER;
+      w[8 + i].pTexelBufferView = &texels[i].second;
     }
-    vkUpdateDescriptorSets(r_->ctx().device(), 11, w, 0, nullptr);
+    vkUpdateDescriptorSets(r_->ctx().device(), 12, w, 0, nullptr);
   }
 }
 
@@ -880,12 +896,16 @@ Result<FrameStats> RenderViewImpl::passLocked(bool interruptible, double frameTa
       const ObjectState& o = objects_[i];
       const uint32_t gx = gridX(o), gy = gridY(o);
       const uint32_t n = std::min(chunk, count - done);
+      // A preview-kernel dispatch hands over through the scratch, one block per invocation
+      // (a whole row of the image's blocks always fits: see resize).
+      const uint32_t maxRows = byPreviewKernel[i] ? std::max(1u, previewScratchBlocks_ / (gx * kShadeGroup * kShadeGroup))
+                                                  : UINT32_MAX;
       // Whole rows of workgroups while they fit, else part of one row (at least one workgroup
       // per submission).
       uint32_t cols = 0, rows = 0;
       double taken = 0;
       if (col == 0) {
-        for (uint32_t r = row; r < gy; ++r, ++rows) {
+        for (uint32_t r = row; r < gy && rows < maxRows; ++r, ++rows) {
           double rowUnits = 0;
           for (uint32_t c = 0; c < gx; ++c) rowUnits += groupUnits(o, size_t(r) * gx + c, n);
           if (units + taken + rowUnits > budget) break;
@@ -912,7 +932,6 @@ Result<FrameStats> RenderViewImpl::passLocked(bool interruptible, double frameTa
       push.frame[3] = n;
       const ShadeKernel& kernel = byPreviewKernel[i] ? *o.previewKernel : *o.kernel;
       bound.push_back(&kernel);
-      vkCmdBindPipeline(cb, VK_PIPELINE_BIND_POINT_COMPUTE, kernel.kernel->pipeline());
       vkCmdBindDescriptorSets(cb, VK_PIPELINE_BIND_POINT_COMPUTE, layout, 1, 1, &o.set, 0, nullptr);
       // One dispatch per band, its rows permuted: llvmpipe hands each thread one contiguous
       // run of a dispatch's workgroups (lp_cs_tpool: two halves on two cores), and a band's
@@ -932,7 +951,21 @@ Result<FrameStats> RenderViewImpl::passLocked(bool interruptible, double frameTa
       // Dispatch origin; images are at most 4096 wide.
       push.target[2] = (o.pixels.x + col * kShadeGroup * scale) | ((o.pixels.y + row * kShadeGroup * scale) << 16);
       vkCmdPushConstants(cb, layout, VK_SHADER_STAGE_COMPUTE_BIT, 0, sizeof(push), &push);
-      vkCmdDispatch(cb, cols, rows, 1);
+      if (byPreviewKernel[i]) {
+        // The preview kernel's three stages over one grid (kernels/preview.comp.glsl), each
+        // reading what the one before wrote to the scratch; the next dispatch writes it again.
+        const VkPipeline stages[3] = {r_->previewSetupPipeline(env_->constant), kernel.kernel->pipeline(),
+                                      r_->previewScatterPipeline()};
+        for (VkPipeline stage : stages) {
+          vkCmdBindPipeline(cb, VK_PIPELINE_BIND_POINT_COMPUTE, stage);
+          vkCmdDispatch(cb, cols, rows, 1);
+          memoryBarrier(cb, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_ACCESS_SHADER_WRITE_BIT,
+                        VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_ACCESS_SHADER_READ_BIT | VK_ACCESS_SHADER_WRITE_BIT);
+        }
+      } else {
+        vkCmdBindPipeline(cb, VK_PIPELINE_BIND_POINT_COMPUTE, kernel.kernel->pipeline());
+        vkCmdDispatch(cb, cols, rows, 1);
+      }
       units += taken;
       // Objects cover disjoint pixels, so their dispatches need no barrier between them; the
       // next sweep adds to the same pixels and does.

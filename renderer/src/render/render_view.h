@@ -111,6 +111,10 @@ class RenderViewImpl final : public RenderView {
   Buffer gbuffer_, accum_, counters_, outRgba8_, outFloat_, partials_;
   // Pixel indices of the edge pixels (see listEdgePixels), host-written; room for every pixel.
   Buffer edgeList_;
+  // The preview kernel's hand-over between its stages (binding 12): previewScratchBlocks_ blocks
+  // of one dispatch, 6 x 16 bytes each (kernels/preview_setup.comp.glsl).
+  Buffer previewScratch_;
+  uint32_t previewScratchBlocks_ = 0;
   // Texel views of gbuffer_'s planes per slice and of accum_ (declared after the buffers:
   // destroyed before them).
   TexelView surfaceViews_[kMaxJitter], detailViews_[kMaxJitter], edgeView_;

@@ -100,6 +100,21 @@ Result<void> RendererImpl::init(const RendererOptions& options) {
                                  {"lib/bindings.glsl", "lib/gbuffer_encoding.glsl", "lib/environment.glsl", "kernels/background.comp.glsl"});
     if (!bg) return bg.takeError();
     (constant ? backgroundConstant_ : backgroundCube_) = std::move(bg.value());
+    if (!compilesAtFirstDispatch()) continue;  // the preview kernel's stages: CPU devices only
+    // Always the tangent frame and texCoord: the setup serves every BRDF (preview_setup.comp.glsl).
+    auto setup = compileFixedKernel(
+        {constant ? "BRDFA_ENV_CONSTANT" : "BRDFA_ENV_CUBEMAP", "BRDFA_TANGENT_FRAME", "BRDFA_TEXCOORD",
+         "BRDFA_PREVIEW_LOG2_CELLS " + std::to_string(kPreviewLog2Cells)},
+        {"lib/brdf_inputs.glsl", "lib/bindings.glsl", "lib/gbuffer_encoding.glsl", "lib/random.glsl", "lib/frame.glsl",
+         "lib/sampling.glsl", "lib/environment.glsl", "lib/environment_sampling.glsl", "lib/shade_pixel.glsl",
+         "lib/environment_preview.glsl", "kernels/preview_setup.comp.glsl"});
+    if (!setup) return setup.takeError();
+    (constant ? previewSetupConstant_ : previewSetupCube_) = std::move(setup.value());
+  }
+  if (compilesAtFirstDispatch()) {
+    auto scatter = compileFixedKernel({}, {"lib/bindings.glsl", "kernels/preview_scatter.comp.glsl"});
+    if (!scatter) return scatter.takeError();
+    previewScatter_ = std::move(scatter.value());
   }
 
   VkSamplerCreateInfo sci{VK_STRUCTURE_TYPE_SAMPLER_CREATE_INFO};
@@ -166,6 +181,9 @@ RendererImpl::~RendererImpl() {
   resolve_.reset();
   backgroundConstant_.reset();
   backgroundCube_.reset();
+  previewSetupConstant_.reset();
+  previewSetupCube_.reset();
+  previewScatter_.reset();
   if (envSampler_) vkDestroySampler(d, envSampler_, nullptr);
   if (textureSampler_) vkDestroySampler(d, textureSampler_, nullptr);
   whiteTexture_ = Image();
@@ -181,13 +199,13 @@ Result<void> RendererImpl::createLayouts() {
   VkDevice d = ctx_->device();
   // Set 0: one view's G-buffer, accumulators, counters, environment and outputs
   // (bindings as in shaders/lib/bindings.glsl).
-  const std::array<std::pair<uint32_t, VkDescriptorType>, 11> viewBindings = {{
+  const std::array<std::pair<uint32_t, VkDescriptorType>, 12> viewBindings = {{
       {0, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER},         {3, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER},
       {4, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER},         {5, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER},
       {6, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER},         {7, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER},
       {8, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER},         {9, VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER},
       {10, VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER},  {11, VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER},
-      {13, VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER}}};
+      {12, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER},        {13, VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER}}};
   std::array<VkDescriptorSetLayoutBinding, viewBindings.size()> view{};
   for (size_t i = 0; i < view.size(); ++i)
     view[i] = {viewBindings[i].first, viewBindings[i].second, 1, VK_SHADER_STAGE_COMPUTE_BIT, nullptr};
@@ -518,10 +536,6 @@ AssembledProgram RendererImpl::assembleShadeProgram(const BrdfDefinition& brdf, 
   for (const char* piece : {"lib/bindings.glsl", "lib/gbuffer_encoding.glsl", "lib/random.glsl", "lib/frame.glsl", "lib/sampling.glsl",
                             "lib/environment.glsl", "lib/environment_sampling.glsl", "lib/shade_pixel.glsl"})
     spec.commonChunks.push_back(sources_.get(piece));
-  if (preview) {
-    spec.defines.push_back("BRDFA_PREVIEW_LOG2_CELLS " + std::to_string(kPreviewLog2Cells));
-    spec.commonChunks.push_back(sources_.get("lib/environment_preview.glsl"));
-  }
   spec.integrator = sources_.get(preview ? "kernels/preview.comp.glsl" : "kernels/shade.comp.glsl");
   return assembleProgram(spec);
 }

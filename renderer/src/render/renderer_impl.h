@@ -90,6 +90,12 @@ class RendererImpl final : public Renderer, public std::enable_shared_from_this<
   VkPipeline backgroundPipeline(bool constantEnv) const {
     return (constantEnv ? backgroundConstant_ : backgroundCube_)->pipeline();
   }
+  // The preview kernel's fixed first and last stages (kernels/preview_setup.comp.glsl,
+  // kernels/preview_scatter.comp.glsl), around a program's preview stage (shadeKernels).
+  VkPipeline previewSetupPipeline(bool constantEnv) const {
+    return (constantEnv ? previewSetupConstant_ : previewSetupCube_)->pipeline();
+  }
+  VkPipeline previewScatterPipeline() const { return previewScatter_->pipeline(); }
   VkSampler environmentSampler() const { return envSampler_; }
   // Binds the 1x1 white texture to the four texture slots (set 1, bindings 2..5) of `objectSet`:
   // every slot of a bound set must hold a valid image (see brdf_check.cpp).
@@ -175,6 +181,7 @@ class RendererImpl final : public Renderer, public std::enable_shared_from_this<
   VkSampler textureSampler_ = VK_NULL_HANDLE;  // iTexture0..3: linear, repeating
   Image whiteTexture_;                          // 1x1 RGBA8 (1, 1, 1, 1): an unbound texture slot
   std::unique_ptr<ComputeKernel> resolve_, backgroundConstant_, backgroundCube_;
+  std::unique_ptr<ComputeKernel> previewSetupConstant_, previewSetupCube_, previewScatter_;
   bool profilePasses_ = false;
   bool hostResolve_ = false;
 

@@ -1,0 +1,16 @@
+// Stage 3 of 3 of the preview kernel (kernels/preview.comp.glsl): writes each block's value to
+// the block's pixels this object covers, both halves overwritten (half A: the sample, half B:
+// none), as a preview by the program would. A fixed program, so a new BRDF's driver compile
+// leaves out these stores.
+
+layout(local_size_x = 8, local_size_y = 8, local_size_z = 1) in;
+
+void main() {
+  uint slot = brdfa_previewSlot();
+  uint mask = brdfa_previewScratch[slot + 2u].w;
+  if (mask == 0u) return;
+  uint first = brdfa_previewScratch[slot + 3u].w;
+  vec4 valueA = uintBitsToFloat(brdfa_previewScratch[slot + 5u]), valueB = vec4(0.0);
+  for (uint k = 0u; k < 4u; ++k)
+    if ((mask & (1u << k)) != 0u) brdfa_storeHalves(first + (k >> 1u) * brdfa_pc.frame.x + (k & 1u), valueA, valueB);
+}

@@ -1,0 +1,54 @@
+// Stage 1 of 3 of the preview kernel (kernels/preview.comp.glsl says why it exists): everything
+// of one sample at one pixel of each 2x2 block that does not depend on the BRDF. A fixed
+// program, compiled once per environment kind, so a new BRDF's driver compile (lavapipe JITs
+// at the first dispatch) leaves all this out: its frame, sample direction and coarse
+// environment lookup alone took ~60 ms of that compile.
+//
+// Writes, per block, at brdfa_previewSlot() (lib/bindings.glsl):
+//   +0 N, texCoord.x   +1 V, texCoord.y   +2 X, covered-pixel mask (bit k: pixel base + (k & 1, k >> 1))
+//   +3 Y, the block's first pixel index   +4 L   +5 L_env(L) * cos / pdf * intensity
+// (float bits where a float). Mask 0: nothing of this object in the block; stages 2 and 3 skip it.
+// The frame is always the tangent frame (BRDFA_TANGENT_FRAME): a BRDF that reads X and Y gets
+// its program's frame, and for one that does not, any orthonormal frame serves the cosine
+// sampling.
+
+layout(local_size_x = 8, local_size_y = 8, local_size_z = 1) in;
+
+void main() {
+  uint slot = brdfa_previewSlot();
+  uvec2 base = brdfa_dispatchPixel(2u);
+  uint mask = 0u;
+  uvec2 p = base, surface = uvec2(0u);
+  if (base.x < brdfa_pc.frame.x && base.y < brdfa_pc.frame.y) {
+    // The block's pixels (clamped into the image: a clamped one is never written), their
+    // surfaces, and which of them are this object's; the first covered one is shaded.
+    uvec2 last = brdfa_pc.frame.xy - 1u;
+    uvec2 q[4] = uvec2[4](base, min(base + uvec2(1u, 0u), last), min(base + uvec2(0u, 1u), last), min(base + 1u, last));
+    bool inside[4] = bool[4](true, base.x < last.x, base.y < last.y, base.x < last.x && base.y < last.y);
+    for (int k = 3; k >= 0; --k) {
+      uvec2 s = brdfa_gSurface(brdfa_pixelIndex(q[k]));
+      if (inside[k] && brdfa_objectId(s) == brdfa_pc.target.x) {
+        mask |= 1u << uint(k);
+        p = q[k];
+        surface = s;
+      }
+    }
+  }
+  brdfa_previewScratch[slot + 2u].w = mask;
+  if (mask == 0u) return;
+  vec3 N, V, X, Y;
+  brdfa_surfaceFrame(p, surface, N, V, X, Y);
+  brdfa_environmentBegin();
+  // Sample 0 of half A, as a pass by the program takes it (kernels/shade.comp.glsl).
+  uvec4 u = brdfa_sample4D(brdfa_halfRotation(p, 0u, brdfa_pc.target.y), 0u);
+  float weight;
+  vec3 l = brdfa_sampleCosineHemisphere(brdfa_unorm2(u.xy), weight);
+  vec3 L = X * l.x + Y * l.y + N * l.z;
+  vec3 incoming = brdfa_environmentPreview(L) * (weight * brdfa_environmentIntensity());
+  brdfa_previewScratch[slot] = uvec4(floatBitsToUint(N), floatBitsToUint(texCoord.x));
+  brdfa_previewScratch[slot + 1u] = uvec4(floatBitsToUint(V), floatBitsToUint(texCoord.y));
+  brdfa_previewScratch[slot + 2u].xyz = floatBitsToUint(X);
+  brdfa_previewScratch[slot + 3u] = uvec4(floatBitsToUint(Y), brdfa_pixelIndex(base));
+  brdfa_previewScratch[slot + 4u].xyz = floatBitsToUint(L);
+  brdfa_previewScratch[slot + 5u].xyz = floatBitsToUint(incoming);
+}
