@@ -277,7 +277,7 @@ TEST_F(Sessions, StreamSendsHalfSizePreviewsUntilFourSamplesAndTheConvergedFrame
   EXPECT_EQ(pngWidth(r->body), 512u);
 }
 
-// While a stream client watches, each pass is sized to a 50 ms frame (Session::kStreamFrameMs);
+// While a stream client watches, each pass is sized to a 42 ms frame (Session::kStreamFrameMs);
 // a script waiting on /frame gets passes of samples_per_frame. Up to 511 samples with 256 per
 // pass, the unwatched passes ramp 1, 2, ... 256: 9 of them. The BRDF is a white Lambertian
 // made slow (tests/hostile/slow_loop.brdf, 40 rounds a sample), so that on lavapipe a pass of
@@ -297,7 +297,7 @@ TEST_F(Sessions, AWatchedStreamTakesPassesThatFitItsFrameInterval) {
   EXPECT_EQ(unwatched["passes"], 9) << unwatched.dump();
   EXPECT_NEAR(interiorMean(img, 1.0, 1e-4), 1.0, 1e-4);
   const double fullPassMs = unwatched["last_pass_ms"].get<double>();
-  constexpr double kStreamFrameMs = 50;  // Session::kStreamFrameMs
+  constexpr double kStreamFrameMs = 42;  // Session::kStreamFrameMs
   if (fullPassMs < 4 * kStreamFrameMs)
     GTEST_SKIP() << "a 256-sample pass took " << fullPassMs << " ms on this device: passes of a frame would be large";
 
