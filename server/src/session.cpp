@@ -330,8 +330,11 @@ void Session::encodeLoop() {
     RawFrame raw = std::move(*pendingRaw_);
     pendingRaw_.reset();
     lock.unlock();
+    const auto encodeStart = Clock::now();
     auto png = std::make_shared<const std::vector<uint8_t>>(encodeStreamPng(raw));
+    const double encodeMs = std::chrono::duration<double, std::milli>(Clock::now() - encodeStart).count();
     lock.lock();
+    encodeMs_ = encodeMs_ > 0 ? 0.8 * encodeMs_ + 0.2 * encodeMs : encodeMs;
     latest_.png = std::move(png);
     latest_.seq += 1;
     latest_.spp = raw.spp;
@@ -363,8 +366,10 @@ void Session::renderLoop() {
       const bool previewBefore = stats_.preview;
       const uint64_t pixels = uint64_t(std::max(render_.width, 0)) * uint64_t(std::max(render_.height, 0));
       // The pass, the read and the loop's own work (~2 ms) within one stream frame interval;
-      // never below 5 ms, however slow the reads.
-      const double frameTargetMs = streamClients_ > 0 ? std::max(kStreamFrameMs - readMs_ - 2.0, 5.0) : 0.0;
+      // never below kFrameWorkShare times the frame's read and encode, nor 5 ms.
+      const double frameTargetMs =
+          streamClients_ > 0 ? std::max({kStreamFrameMs - readMs_ - 2.0, kFrameWorkShare * (readMs_ + encodeMs_), 5.0})
+                             : 0.0;
       lock.unlock();
       Result<FrameStats> pass = view_->renderPass(frameTargetMs);
       lock.lock();
@@ -388,9 +393,9 @@ void Session::renderLoop() {
       noteStatsLocked(pass.value(), true);
       progress_.notify_all();
       bool due = publishRequested_ || stats_.done() || Clock::now() - lastPublish_ >= kPublishInterval;
-      // A pass interrupted for a scene change (RenderView::interruptPass) added nothing to show,
-      // and reading a frame would first complete it, delaying the change by most of a pass.
-      const bool progressed = pass->passes != passesBefore || pass->preview != previewBefore;
+      // A pass interrupted for a scene change (RenderView::interruptPass) added nothing to show
+      // (the change comes next). One that returned at its frame target has (passInProgress).
+      const bool progressed = pass->passes != passesBefore || pass->preview != previewBefore || pass->passInProgress;
       if (streamClients_ > 0 && hasImageLocked() && due && progressed) publishFrame(lock);
     } else {
       publishFrame(lock);

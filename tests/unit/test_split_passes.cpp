@@ -358,6 +358,70 @@ TEST(SplitPasses, WhiteLambertInFurnaceIsOneWhenSplit) {
   EXPECT_EQ(f.rgba32f[0], 0.0f) << "hidden background must be black";
 }
 
+// Issue 15: a watched pass that outlasts its frame (renderPass(frameTargetMs)) returns at a
+// submission boundary once the frame's time is spent, leaving the pass to the next call; a frame
+// read meanwhile shows the pass as far as it got without completing it. Every pixel's mean
+// divides by its own sample count, so in the furnace a white Lambertian is exactly 1 at every
+// interior pixel whether a pass has reached it or not; and passes left partway and resumed add
+// the same samples as whole ones (to float rounding), under the sky with mis and two objects.
+// (Fails with readFrame completing every partial pass, or with means divided by the view's spp.)
+TEST(SplitPasses, APassPastItsFrameTargetReturnsPartwayAndShowsWhereItGot) {
+  auto renderer = makeRenderer(0.05);
+  ASSERT_TRUE(renderer);
+  const double frameTargetMs = 0.01;  // spent by any submission: every pass after the first is sliced
+  auto renderSliced = [&](const Scene& scene, int& partway, std::vector<Frame>* midPass) {
+    std::unique_ptr<RenderView> view = viewWithScene(*renderer, scene);
+    EXPECT_TRUE(view);
+    if (!view) return Frame{};
+    partway = 0;
+    for (int guard = 0; guard < 100000; ++guard) {
+      auto pass = view->renderPass(frameTargetMs);
+      EXPECT_TRUE(pass.ok());
+      if (!pass.ok() || pass->done()) break;
+      if (pass->passes == 0) {
+        EXPECT_FALSE(pass->passInProgress) << "the first pass after a restart is never shown partway";
+      }
+      if (!pass->passInProgress) continue;
+      ++partway;
+      if (!midPass || partway % 7 != 1) continue;
+      auto frame = view->readFrame(true);
+      EXPECT_TRUE(frame.ok());
+      if (!frame.ok()) break;
+      EXPECT_EQ(frame->stats.spp, pass->spp) << "the read completed the pass";
+      EXPECT_TRUE(view->stats().passInProgress);
+      midPass->push_back(frame.value());
+    }
+    auto last = view->readFrame(true);
+    EXPECT_TRUE(last.ok());
+    return last.ok() ? last.value() : Frame{};
+  };
+
+  int partway = 0;
+  std::vector<Frame> midPass;
+  const Frame last = renderSliced(furnaceScene(inlineBrdf(kWhiteLambert), 64, 4, 16), partway, &midPass);
+  ASSERT_EQ(last.stats.spp, 16u);
+  EXPECT_GT(partway, 10);
+  ASSERT_GT(midPass.size(), 2u);
+  size_t ones = 0;
+  for (size_t i = 0; i < last.rgba32f.size(); i += 4) {
+    if (std::abs(last.rgba32f[i] - 1.0f) > 1e-5f) continue;  // background, or an edge
+    ++ones;
+    for (const Frame& f : midPass) ASSERT_NEAR(f.rgba32f[i], 1.0f, 1e-5f) << "pixel " << i / 4 << " at spp " << f.stats.spp;
+  }
+  EXPECT_GT(ones, 500u);
+
+  // One sample a pass either way: the frame target would otherwise size the passes, and each
+  // pass takes its own G-buffer slice.
+  Scene scene = twoObjectScene();
+  scene.render.samplesPerFrame = 1;
+  const Frame whole = render(*renderer, scene);
+  const Frame sliced = renderSliced(scene, partway, nullptr);
+  EXPECT_GT(partway, 10);
+  EXPECT_EQ(sliced.stats.spp, whole.stats.spp);
+  EXPECT_EQ(sliced.stats.nanSamples, whole.stats.nanSamples);
+  expectSameImage(sliced, whole);
+}
+
 // A loop-heavy BRDF (tests/hostile/slow_loop.brdf: a white Lambertian computed slowly) at a
 // size where one unsplit pass takes 1.5-4 s on lavapipe (2 cores), rendered on one thread
 // while a cheap view renders on another: the cheap view keeps completing passes, never waiting

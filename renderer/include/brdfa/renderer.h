@@ -135,6 +135,9 @@ struct FrameStats {
   // The image is a preview (RenderSettings::previewPass): no pass since the last restart
   // yet, spp 0, but a frame read shows one sample per 2x2 block of pixels.
   bool preview = false;
+  // The latest renderPass returned partway through its pass, at its frame target (renderPass):
+  // a frame read now shows the pass's samples where it has been. spp counts the pass once done.
+  bool passInProgress = false;
 };
 
 // A resolved frame read back from the device.
@@ -172,13 +175,19 @@ class RenderView {
   // samples that fit, but never fewer than take as long as a pass's fixed part, and none
   // fewer where even those would take twice the target (more passes of fewer samples: a
   // higher frame rate for a little less throughput, each pass's fixed part paid more often).
+  // Where even one sample per pixel takes longer than frameTargetMs (a costly BRDF, mis at
+  // 512^2 on a CPU device), a pass after the first since the restart returns at a submission
+  // boundary once the target is spent (stats().passInProgress), and the next call goes on
+  // with it; how a pass is split never changes the image.
   virtual Result<FrameStats> renderPass(double frameTargetMs) = 0;
   Result<FrameStats> renderPass() { return renderPass(0.0); }
 
   virtual FrameStats stats() const = 0;
 
   // Resolves the accumulators into an image; `linear` also returns float radiance. A pass left
-  // incomplete by interruptPass() is completed first.
+  // incomplete (interruptPass(), or a frame target) is completed first if it is the first pass
+  // since the restart, whose pixels not yet reached still hold the previous image; a later one
+  // is shown as far as it got (each pixel's mean divides by its own sample count).
   virtual Result<Frame> readFrame(bool linear) = 0;
 
   // Asks the pass in progress, or else the next one, to stop at its next queue-submission

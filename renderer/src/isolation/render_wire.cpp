@@ -177,6 +177,7 @@ json toJson(const FrameStats& f) {
               {"submissions", f.submissions},
               {"maxSubmissionMs", f.maxSubmissionMs},
               {"preview", f.preview},
+              {"passInProgress", f.passInProgress},
               {"breakdown", json::array({f.breakdown.setupMs, f.breakdown.shadeMs, f.breakdown.edgeMs,
                                          f.breakdown.resolveMs, f.breakdown.otherMs})}};
 }
@@ -204,6 +205,7 @@ FrameStats statsFromJson(const json& j) {
   j.at("submissions").get_to(f.submissions);
   j.at("maxSubmissionMs").get_to(f.maxSubmissionMs);
   j.at("preview").get_to(f.preview);
+  j.at("passInProgress").get_to(f.passInProgress);
   const json& b = j.at("breakdown");
   if (!b.is_array() || b.size() != 5) throw json::type_error::create(302, "breakdown: 5 numbers expected", &b);
   b[0].get_to(f.breakdown.setupMs);

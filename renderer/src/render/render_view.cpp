@@ -765,6 +765,7 @@ Result<FrameStats> RenderViewImpl::renderPass(double frameTargetMs) {
 }
 
 Result<FrameStats> RenderViewImpl::passLocked(bool interruptible, double frameTargetMs) {
+  stats_.passInProgress = false;
   const uint64_t maxSamples = static_cast<uint64_t>(scene_.render.maxSamples);
   updateDone();
   if (stats_.done()) {
@@ -797,6 +798,11 @@ Result<FrameStats> RenderViewImpl::passLocked(bool interruptible, double frameTa
   const bool refreshError = resumed ? resumed->refreshError
                                     : !preview && stats_.passes >= 1 &&
                                           (sinceErrorMs_ >= kErrorRefreshMs || stats_.spp + count >= maxSamples);
+  // A watched pass that outlasts its frame (even one sample: a costly BRDF, or mis at 512^2 on
+  // a CPU device) returns at a submission boundary once the frame's time is spent, so the
+  // stream shows a frame partway and this goes on at the next call. Not the first pass after a
+  // restart: it overwrites, and the pixels it has not reached still hold the previous image.
+  const bool sliced = frameTargetMs > 0 && interruptible && !preview && stats_.passes >= 1;
 
   // Objects whose preview comes from the preview kernel (buildObjects).
   std::vector<bool> byPreviewKernel(objects_.size(), false);
@@ -884,10 +890,12 @@ Result<FrameStats> RenderViewImpl::passLocked(bool interruptible, double frameTa
     // allows at the measured cost, growing at most kGrowth times the largest measured
     // submission (a cost measured where the objects are thin can be too low).
     const bool interactive = targetMs > 0 && stats_.passes >= 1 && stats_.passes < kInteractivePasses;
-    const double sized = std::min(targetMs <= 0     ? INFINITY
-                                  : msPerUnit_ <= 0 ? kProbeUnits
-                                                    : std::min(targetMs / msPerUnit_, kGrowth * maxUnits_),
-                                  interactive ? passUnits / kInteractiveSplits : INFINITY);
+    const double sized = std::min({targetMs <= 0     ? INFINITY
+                                   : msPerUnit_ <= 0 ? kProbeUnits
+                                                     : std::min(targetMs / msPerUnit_, kGrowth * maxUnits_),
+                                   interactive ? passUnits / kInteractiveSplits : INFINITY,
+                                   // two or more submissions per frame, to return near its target
+                                   sliced && msPerUnit_ > 0 ? 0.5 * frameTargetMs / msPerUnit_ : INFINITY});
     // No small last submission: its fixed costs would come on top for little.
     const double budget = msPerUnit_ > 0 && passUnits - passDone <= kTail * sized ? INFINITY : sized;
     double units = 0;
@@ -1033,13 +1041,17 @@ Result<FrameStats> RenderViewImpl::passLocked(bool interruptible, double frameTa
     maxUnits_ = std::max(maxUnits_, units);
     // A preview is not interrupted: it is short, and under changes coming faster than it
     // (a camera dragged), interrupting it would leave nothing to show at all.
-    if (done < count && interruptible && !preview && interruptRequested_.exchange(false)) {
-      // Interrupted (a scene change waits): keep the place; spp counts the pass once complete.
-      const double ms = msSince(t0);
+    const bool interrupted = done < count && interruptible && !preview && interruptRequested_.exchange(false);
+    // At the frame target: the next submission (about as long as this one) would pass it.
+    const bool frameSpent = done < count && sliced && msSince(t0) + ms > frameTargetMs;
+    if (interrupted || frameSpent) {
+      // Keep the place; spp counts the pass once complete.
+      const double segmentMs = msSince(t0);
       partial_ = PartialPass{count, slice, chunk, done, row, col, obj, passDone,
-                             (resumed ? resumed->ms : 0.0) + ms, refreshError};
-      stats_.elapsedMs += ms;
-      sinceErrorMs_ += ms;
+                             (resumed ? resumed->ms : 0.0) + segmentMs, refreshError};
+      stats_.elapsedMs += segmentMs;
+      sinceErrorMs_ += segmentMs;
+      stats_.passInProgress = !interrupted;  // interrupted: a scene change waits, nothing to show
       return stats_;
     }
   } while (done < count);
@@ -1102,9 +1114,10 @@ FrameStats RenderViewImpl::stats() const {
 Result<Frame> RenderViewImpl::readFrame(bool linear) {
   std::lock_guard<std::mutex> lock(mutex_);
   if (!hasScene_) return makeError(ErrorCode::InvalidArgument, "no scene has been set");
-  // An interrupted pass is completed first: in its first pass after a restart, the pixels it
-  // has not reached yet still hold the previous image.
-  if (partial_) BRDFA_TRY(passLocked(false));
+  // A pass left partway (interrupted, or at a frame target) is completed first where it is the
+  // first after a restart: the pixels it has not reached yet still hold the previous image.
+  // A later one shows as far as it got: each pixel's mean divides by its own sample count.
+  if (partial_ && stats_.passes == 0) BRDFA_TRY(passLocked(false));
   const bool host = r_->hostResolve();
   // Before the first pass of a restart the accumulators may still hold the previous scene's
   // object pixels (a parameter change does not clear them): clear now. A preview has

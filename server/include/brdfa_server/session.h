@@ -128,6 +128,10 @@ class Session {
   // render worker's round trips share two cores with the device's threads) gave 17-23 frames/s
   // on a 2-core VM; 42 ms (~24/s) leaves that margin for ~2 % fewer samples per second.
   static constexpr double kStreamFrameMs = 42.0;
+  // A frame's read and encode take at most about 1 / (1 + kFrameWorkShare) of a watched
+  // session's time: a large image's frames (1024x768: ~40 ms of read and encode on a 2-core
+  // VM) get longer passes instead of taking the CPU from rendering at ~24 frames/s.
+  static constexpr double kFrameWorkShare = 2.0;
   // Stream frames with fewer samples than this (the first passes after a change: 1, then 3)
   // are sent at half resolution when the frame has at least kPreviewMinPixels and is not the
   // final (done) one: they are mostly noise, and the full-size PNG of noise is what costs the most
@@ -187,7 +191,8 @@ class Session {
   int streamClients_ = 0;
   bool publishRequested_ = false;
   Clock::time_point lastPublish_{};
-  double readMs_ = 0;  // running mean of a stream frame's read (publishFrame), ms
+  double readMs_ = 0;    // running mean of a stream frame's read (publishFrame), ms
+  double encodeMs_ = 0;  // running mean of a stream frame's PNG encode (encodeLoop), ms
   StreamFrame latest_;
   // A frame read back for the stream, waiting for the encoder thread. Only the newest is kept:
   // when encoding falls behind, older frames are dropped rather than queued.
