@@ -18,9 +18,10 @@ namespace brdfa {
 namespace {
 
 constexpr uint32_t kShadeGroup = 8;     // local size of shade/background kernels
-// The preview scratch holds at most this many 2x2 blocks (6 MiB; a 512^2 image's in one
-// dispatch): a larger object's preview goes in several.
-constexpr uint32_t kPreviewScratchBlocks = 65536;
+// The preview scratch holds at most this many 2x2 blocks (1.5 MiB per view: a class of 30
+// views at 512^2 held ~100 MiB more with a whole image's 6 MiB each); a larger object's preview
+// goes in several dispatches (a 512^2 sphere's in about 4, ~1 ms more on lavapipe).
+constexpr uint32_t kPreviewScratchBlocks = 16384;
 constexpr VkDeviceSize kPreviewScratchBlockBytes = 6 * 16;  // BRDFA_PREVIEW_STRIDE texels
 constexpr uint32_t kResolveGroup = 16;  // local size of the resolve kernel
 constexpr double kErrorRefreshMs = 200; // rel_error is refreshed at least this often while rendering
