@@ -9,8 +9,8 @@ void main() {
   uint slot = brdfa_previewSlot();
   uint mask = brdfa_previewScratch[slot + 2u].w;
   if (mask == 0u) return;
-  uint first = brdfa_previewScratch[slot + 3u].w;
-  vec4 valueA = uintBitsToFloat(brdfa_previewScratch[slot + 5u]), valueB = vec4(0.0);
-  for (uint k = 0u; k < 4u; ++k)
-    if ((mask & (1u << k)) != 0u) brdfa_storeHalves(first + (k >> 1u) * brdfa_pc.frame.x + (k & 1u), valueA, valueB);
+  uint origin = brdfa_previewScratch[slot + 3u].w;
+  // A preview overwrites (target.w), as lib/shade_pixel.glsl's write of a preview by the program.
+  brdfa_writeShaded(uvec2(origin & 0xffffu, origin >> 16u), mask, true, uintBitsToFloat(brdfa_previewScratch[slot + 5u]),
+                    vec4(0.0));
 }

@@ -6,7 +6,7 @@
 //
 // Writes, per block, at brdfa_previewSlot() (lib/bindings.glsl):
 //   +0 N, texCoord.x   +1 V, texCoord.y   +2 X, covered-pixel mask (bit k: pixel base + (k & 1, k >> 1))
-//   +3 Y, the block's first pixel index   +4 L   +5 L_env(L) * cos / pdf * intensity
+//   +3 Y, the block's origin (x | y << 16)   +4 L   +5 L_env(L) * cos / pdf * intensity
 // (float bits where a float). Mask 0: nothing of this object in the block; stages 2 and 3 skip it.
 // The frame is always the tangent frame (BRDFA_TANGENT_FRAME): a BRDF that reads X and Y gets
 // its program's frame, and for one that does not, any orthonormal frame serves the cosine
@@ -16,24 +16,11 @@ layout(local_size_x = 8, local_size_y = 8, local_size_z = 1) in;
 
 void main() {
   uint slot = brdfa_previewSlot();
-  uvec2 base = brdfa_dispatchPixel(2u);
-  uint mask = 0u;
-  uvec2 p = base, surface = uvec2(0u);
-  if (base.x < brdfa_pc.frame.x && base.y < brdfa_pc.frame.y) {
-    // The block's pixels (clamped into the image: a clamped one is never written), their
-    // surfaces, and which of them are this object's; the first covered one is shaded.
-    uvec2 last = brdfa_pc.frame.xy - 1u;
-    uvec2 q[4] = uvec2[4](base, min(base + uvec2(1u, 0u), last), min(base + uvec2(0u, 1u), last), min(base + 1u, last));
-    bool inside[4] = bool[4](true, base.x < last.x, base.y < last.y, base.x < last.x && base.y < last.y);
-    for (int k = 3; k >= 0; --k) {
-      uvec2 s = brdfa_gSurface(brdfa_pixelIndex(q[k]));
-      if (inside[k] && brdfa_objectId(s) == brdfa_pc.target.x) {
-        mask |= 1u << uint(k);
-        p = q[k];
-        surface = s;
-      }
-    }
-  }
+  // The block's pixels of this object, and the first of them, which is shaded (as a preview by
+  // the program picks them, kernels/shade.comp.glsl).
+  uvec2 base, p, surface;
+  uint mask;
+  if (!brdfa_shadedPixel(true, base, mask, p, surface)) mask = 0u;
   brdfa_previewScratch[slot + 2u].w = mask;
   if (mask == 0u) return;
   vec3 N, V, X, Y;
@@ -48,7 +35,7 @@ void main() {
   brdfa_previewScratch[slot] = uvec4(floatBitsToUint(N), floatBitsToUint(texCoord.x));
   brdfa_previewScratch[slot + 1u] = uvec4(floatBitsToUint(V), floatBitsToUint(texCoord.y));
   brdfa_previewScratch[slot + 2u].xyz = floatBitsToUint(X);
-  brdfa_previewScratch[slot + 3u] = uvec4(floatBitsToUint(Y), brdfa_pixelIndex(base));
+  brdfa_previewScratch[slot + 3u] = uvec4(floatBitsToUint(Y), base.x | (base.y << 16u));
   brdfa_previewScratch[slot + 4u].xyz = floatBitsToUint(L);
   brdfa_previewScratch[slot + 5u].xyz = floatBitsToUint(incoming);
 }

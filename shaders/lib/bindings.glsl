@@ -76,11 +76,6 @@ const uint BRDFA_PREVIEW_STRIDE = 6u;
 uint brdfa_previewSlot() {
   return (gl_GlobalInvocationID.y * gl_NumWorkGroups.x * 8u + gl_GlobalInvocationID.x) * BRDFA_PREVIEW_STRIDE;
 }
-// Overwrites both halves' texels of `pixel`.
-void brdfa_storeHalves(uint pixel, vec4 valueA, vec4 valueB) {
-  brdfa_accumStore(0u, pixel, valueA);
-  brdfa_accumStore(1u, pixel, valueB);
-}
 // Adds `value` to a half's texel, or overwrites it on the first pass after a restart (so a
 // change of BRDF or parameters needs no clear of the whole buffer).
 void brdfa_accumulate(uint halfIndex, uint pixel, vec4 value, bool overwrite) {

@@ -43,6 +43,19 @@ constexpr uint64_t kDriverGrowthBytes = 40ull << 20;
 // A brdfa-compile-worker between compiles: 33 MiB resident (glslang 11.13, Debian 12).
 constexpr uint64_t kIdleCompileWorkerBytes = 36ull << 20;
 constexpr VkFormat kDepthFormat = VK_FORMAT_D32_SFLOAT;
+// The shaders/lib pieces of a shading program after the BRDF, in order (each may call those
+// before it): the shade kernel's, and the preview kernel's fixed stages'.
+const std::vector<std::string> kShadeLibPieces = {"lib/bindings.glsl",      "lib/gbuffer_encoding.glsl",
+                                                  "lib/random.glsl",        "lib/frame.glsl",
+                                                  "lib/sampling.glsl",      "lib/environment.glsl",
+                                                  "lib/environment_sampling.glsl", "lib/shade_pixel.glsl"};
+// A fixed stage of the preview kernel: texCoord's declaration, the shading pieces, then `extra`.
+std::vector<std::string> previewStagePieces(const std::vector<std::string>& extra) {
+  std::vector<std::string> pieces{"lib/brdf_inputs.glsl"};
+  pieces.insert(pieces.end(), kShadeLibPieces.begin(), kShadeLibPieces.end());
+  pieces.insert(pieces.end(), extra.begin(), extra.end());
+  return pieces;
+}
 
 template <class Map>
 void evictOldest(Map& map, std::deque<uint64_t>& order) {
@@ -105,14 +118,14 @@ Result<void> RendererImpl::init(const RendererOptions& options) {
     auto setup = compileFixedKernel(
         {constant ? "BRDFA_ENV_CONSTANT" : "BRDFA_ENV_CUBEMAP", "BRDFA_TANGENT_FRAME", "BRDFA_TEXCOORD",
          "BRDFA_PREVIEW_LOG2_CELLS " + std::to_string(kPreviewLog2Cells)},
-        {"lib/brdf_inputs.glsl", "lib/bindings.glsl", "lib/gbuffer_encoding.glsl", "lib/random.glsl", "lib/frame.glsl",
-         "lib/sampling.glsl", "lib/environment.glsl", "lib/environment_sampling.glsl", "lib/shade_pixel.glsl",
-         "lib/environment_preview.glsl", "kernels/preview_setup.comp.glsl"});
+        previewStagePieces({"lib/environment_preview.glsl", "kernels/preview_setup.comp.glsl"}));
     if (!setup) return setup.takeError();
     (constant ? previewSetupConstant_ : previewSetupCube_) = std::move(setup.value());
   }
   if (compilesAtFirstDispatch()) {
-    auto scatter = compileFixedKernel({}, {"lib/bindings.glsl", "kernels/preview_scatter.comp.glsl"});
+    // Writes through lib/shade_pixel.glsl, which needs the pieces before it (the environment
+    // kind does not matter to the writes).
+    auto scatter = compileFixedKernel({"BRDFA_ENV_CONSTANT"}, previewStagePieces({"kernels/preview_scatter.comp.glsl"}));
     if (!scatter) return scatter.takeError();
     previewScatter_ = std::move(scatter.value());
   }
@@ -533,9 +546,7 @@ AssembledProgram RendererImpl::assembleShadeProgram(const BrdfDefinition& brdf, 
   if (features.texCoord) spec.defines.push_back("BRDFA_TEXCOORD");
   spec.userChunks.push_back(sources_.get("lib/brdf_inputs.glsl"));
   if (brdf.format == BrdfFormat::Legacy) spec.userChunks.push_back(sources_.get("lib/legacy_inputs.glsl"));
-  for (const char* piece : {"lib/bindings.glsl", "lib/gbuffer_encoding.glsl", "lib/random.glsl", "lib/frame.glsl", "lib/sampling.glsl",
-                            "lib/environment.glsl", "lib/environment_sampling.glsl", "lib/shade_pixel.glsl"})
-    spec.commonChunks.push_back(sources_.get(piece));
+  for (const std::string& piece : kShadeLibPieces) spec.commonChunks.push_back(sources_.get(piece));
   spec.integrator = sources_.get(preview ? "kernels/preview.comp.glsl" : "kernels/shade.comp.glsl");
   return assembleProgram(spec);
 }
