@@ -8,6 +8,12 @@
 
 namespace brdfa::server {
 
+namespace {
+// A running mean of a frame step's time (ms) that follows changes within a few frames; the
+// first measurement starts it.
+void addToRunningMean(double& mean, double ms) { mean = mean > 0 ? 0.8 * mean + 0.2 * ms : ms; }
+}  // namespace
+
 Session::Session(std::string id, std::unique_ptr<RenderView> view, std::chrono::milliseconds idleTimeout,
                  ServiceMetrics* metrics)
     : id_(std::move(id)), view_(std::move(view)), idleTimeout_(idleTimeout), metrics_(metrics) {
@@ -291,7 +297,7 @@ void Session::publishFrame(std::unique_lock<std::mutex>& lock) {
   Result<Frame> frame = view_->readFrame(false);
   const double readMs = std::chrono::duration<double, std::milli>(Clock::now() - readStart).count();
   lock.lock();
-  readMs_ = readMs_ > 0 ? 0.8 * readMs_ + 0.2 * readMs : readMs;
+  addToRunningMean(readMs_, readMs);
   if (!frame) {
     std::fprintf(stderr, "session %s: readFrame for stream failed: %s\n", id_.c_str(), frame.error().message.c_str());
     return;
@@ -334,7 +340,7 @@ void Session::encodeLoop() {
     auto png = std::make_shared<const std::vector<uint8_t>>(encodeStreamPng(raw));
     const double encodeMs = std::chrono::duration<double, std::milli>(Clock::now() - encodeStart).count();
     lock.lock();
-    encodeMs_ = encodeMs_ > 0 ? 0.8 * encodeMs_ + 0.2 * encodeMs : encodeMs;
+    addToRunningMean(encodeMs_, encodeMs);
     latest_.png = std::move(png);
     latest_.seq += 1;
     latest_.spp = raw.spp;

@@ -45,7 +45,7 @@ layout(set = 0, binding = 11) uniform usamplerBuffer brdfa_gDetailTexels;
 layout(set = 0, binding = 13) uniform usamplerBuffer brdfa_edgePixels;
 // The preview's hand-over between its three stages (kernels/preview_setup, preview,
 // preview_scatter .comp.glsl): BRDFA_PREVIEW_STRIDE texels per 2x2 block of one dispatch, in
-// invocation order (brdfa_previewSlot). Words, so the bits of a pixel index or mask pass
+// invocation order (brdfa_previewSlot). Words, so the bits of a block origin or mask pass
 // through unchanged.
 layout(std430, set = 0, binding = 12) buffer BrdfaPreviewScratch { uvec4 brdfa_previewScratch[]; };
 

@@ -123,10 +123,11 @@ class Session {
   static constexpr std::chrono::milliseconds kPublishInterval{33};
   // The frame interval a streamed session aims at: while a stream client watches, each pass is
   // sized to it less the time a frame's read takes (RenderView::renderPass's frame target).
-  // Unwatched, passes keep samples_per_frame. DESIGN.md section 5 asks for at least 20 frames/s:
-  // planned at 50 ms, passes that overran their plan by a few ms (the encoder thread and the
-  // render worker's round trips share two cores with the device's threads) gave 17-23 frames/s
-  // on a 2-core VM; 42 ms (~24/s) leaves that margin for ~2 % fewer samples per second.
+  // Unwatched, passes keep samples_per_frame. DESIGN.md section 5 asks for at least 20 frames/s;
+  // 42 ms (~24/s) leaves a margin for passes that overrun their plan (the encoder thread and the
+  // render worker's round trips share two cores with the device's threads). Where one sample
+  // is longer than the frame (mis at 512^2 on a 2-core VM), what keeps the still stream near
+  // 20-23 frames/s is showing passes partway (RenderView::renderPass), not this margin.
   static constexpr double kStreamFrameMs = 42.0;
   // A frame's read and encode take at most about 1 / (1 + kFrameWorkShare) of a watched
   // session's time: a large image's frames (1024x768: ~40 ms of read and encode on a 2-core
