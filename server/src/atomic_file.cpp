@@ -29,11 +29,9 @@ Result<void> fsyncDir(const fs::path& dir) {
   return {};
 }
 
-}  // namespace
-
-Result<void> writeFileAtomically(const fs::path& target, std::string_view data) {
-  fs::path dir = target.parent_path();
-  if (dir.empty()) dir = ".";
+// Writes `data` to a fresh, fsynced temp file beside `target`; its path, or the error (nothing
+// left behind then).
+Result<fs::path> writeTempFile(const fs::path& dir, const fs::path& target, std::string_view data) {
   std::error_code ec;
   fs::create_directories(dir, ec);
   if (ec) return Error{ErrorCode::Internal, "cannot create folder " + dir.string() + ": " + ec.message()};
@@ -44,7 +42,7 @@ Result<void> writeFileAtomically(const fs::path& target, std::string_view data) 
   int fd = ::mkostemp(name.data(), O_CLOEXEC);
   if (fd < 0) return ioError("cannot create temp file in", dir, errno);
   fs::path tmp(name.data());
-  auto fail = [&](const std::string& what, int err) -> Result<void> {
+  auto fail = [&](const std::string& what, int err) -> Result<fs::path> {
     if (fd >= 0) ::close(fd);
     ::unlink(tmp.c_str());
     return ioError(what, tmp, err);
@@ -66,8 +64,42 @@ Result<void> writeFileAtomically(const fs::path& target, std::string_view data) 
     fd = -1;
     return fail("cannot close", errno);
   }
-  fd = -1;
-  if (::rename(tmp.c_str(), target.c_str()) != 0) return fail("cannot rename over " + target.string() + " from", errno);
+  return tmp;
+}
+
+fs::path folderOf(const fs::path& target) {
+  fs::path dir = target.parent_path();
+  return dir.empty() ? fs::path(".") : dir;
+}
+
+}  // namespace
+
+Result<void> writeFileAtomically(const fs::path& target, std::string_view data) {
+  const fs::path dir = folderOf(target);
+  Result<fs::path> tmp = writeTempFile(dir, target, data);
+  if (!tmp) return tmp.takeError();
+  if (::rename(tmp->c_str(), target.c_str()) != 0) {
+    const int err = errno;
+    ::unlink(tmp->c_str());
+    return ioError("cannot rename over " + target.string() + " from", tmp.value(), err);
+  }
+  return fsyncDir(dir);
+}
+
+Result<void> createFileExclusively(const fs::path& target, std::string_view data, bool& created) {
+  created = false;
+  const fs::path dir = folderOf(target);
+  Result<fs::path> tmp = writeTempFile(dir, target, data);
+  if (!tmp) return tmp.takeError();
+  // link(2) fails with EEXIST when the name is taken, where rename(2) would replace it.
+  const int rc = ::link(tmp->c_str(), target.c_str());
+  const int err = errno;
+  ::unlink(tmp->c_str());
+  if (rc != 0) {
+    if (err == EEXIST) return fsyncDir(dir);
+    return ioError("cannot create " + target.string() + " from", tmp.value(), err);
+  }
+  created = true;
   return fsyncDir(dir);
 }
 

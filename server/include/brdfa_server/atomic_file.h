@@ -19,6 +19,10 @@ inline constexpr std::string_view kTempPrefix = ".tmp-";
 // the target is then untouched and no temp file is left behind.
 Result<void> writeFileAtomically(const std::filesystem::path& target, std::string_view data);
 
+// Like writeFileAtomically, but only when `target` does not exist yet (link(2) of the written
+// temp file, atomic on a shared folder too): false in `created` when another writer had it.
+Result<void> createFileExclusively(const std::filesystem::path& target, std::string_view data, bool& created);
+
 // Unlinks `target` and fsyncs its folder. NotFound when it did not exist.
 Result<void> removeFileDurably(const std::filesystem::path& target);
 
