@@ -2,6 +2,7 @@
 // call each other; they read `state`, change it with set(), and listen with on(key, fn). Every
 // key of a set() call fires that key's listeners once, after all keys are assigned.
 export const state = {
+  me: null,           // GET /api/auth/me: {mode, user, display_name, role, namespace} (none mode: the teacher, user null)
   session: null,      // this tab's session id (never 'default')
   scene: null,        // the session's full scene JSON, as the server last answered it
   stats: null,        // latest GET /stats reply

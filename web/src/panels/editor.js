@@ -12,12 +12,13 @@ import { shader } from '@codemirror/legacy-modes/mode/clike';
 import { setDiagnostics, lintGutter } from '@codemirror/lint';
 import * as api from '../api.js';
 import { state, set, on } from '../state.js';
-import { refreshLibrary, NAME_RE } from '../library.js';
+import { refreshLibrary, NAME_RE, bareName, namespace, ownName, canWrite, canDelete } from '../library.js';
 
 const IDLE_MS = 800;   // a pause in typing this long compiles
 
-// A per-session name so tabs never overwrite each other's work (names: [A-Za-z0-9_-]{1,64}).
-export const scratchName = (session) => `scratch-${session}`;
+// A per-session name so tabs never overwrite each other's work (names: [A-Za-z0-9_-]{1,64}),
+// under the person's namespace (`alice/scratch-<session>`; bare for the teacher).
+export const scratchName = (session) => `${namespace()}scratch-${session}`;
 
 /** Server diagnostic (1-based line, 1-based column or 0) -> CodeMirror diagnostic. */
 function toCm(doc, d) {
@@ -158,9 +159,10 @@ export function mountEditor(el, libEl) {
     select.replaceChildren(...opts);
     select.value = cur && state.library.some((b) => b.name === cur) ? cur : '';
     const e = state.editing;
-    $('.lib-save').disabled = !e?.name || e.builtin;
-    $('.lib-delete').disabled = !e?.name || e.builtin;
-    $('.library-state').textContent = !e ? '' : (e.builtin ? 'read-only: Save as makes a copy' : '') +
+    const readOnly = e?.builtin || (e?.name && !canWrite(e.name));
+    $('.lib-save').disabled = !e?.name || readOnly;
+    $('.lib-delete').disabled = !e?.name || e.builtin || !canDelete(e.name);
+    $('.library-state').textContent = !e ? '' : (readOnly ? 'read-only: Save as makes a copy' : '') +
       (unsaved() ? ' · unsaved changes' : '');
   }
   on('library', showLibrary);
@@ -189,7 +191,8 @@ export function mountEditor(el, libEl) {
     if (apply) await useForObject(b.name, b.params);
     else set({ brdf: { name: b.name, params: b.params } });
     set({ status: scratch ? 'editing this tab\'s scratch BRDF (Save as to keep it)'
-      : b.builtin ? `viewing built-in "${b.name}" (read-only: edits compile into a scratch copy)` : `editing "${b.name}"` });
+      : b.builtin ? `viewing built-in "${b.name}" (read-only: edits compile into a scratch copy)`
+        : !canWrite(b.name) ? `viewing "${b.name}" (read-only: Save as makes your own copy)` : `editing "${b.name}"` });
   }
 
   select.addEventListener('change', async () => {
@@ -221,13 +224,17 @@ export function mountEditor(el, libEl) {
   }
   $('.lib-save').addEventListener('click', () => {
     const e = state.editing;
-    if (e?.name && !e.builtin) saveAs(e.name);
+    if (e?.name && !e.builtin && canWrite(e.name)) saveAs(e.name);
   });
   $('.lib-saveas').addEventListener('click', () => {
-    const suggestion = state.editing?.name ? `${state.editing.name}_copy` : 'my_brdf';
-    const name = prompt('Save as (letters, digits, _ and -, at most 64):', suggestion);
-    if (name == null) return;
-    if (!NAME_RE.test(name) || name === 'inline' || name === 'validate') { set({ status: `"${name}" is not a valid BRDF name` }); return; }
+    // A student's BRDFs are saved under their namespace (alice/NAME): they type NAME.
+    const ns = namespace();
+    const suggestion = state.editing?.name ? `${bareName(state.editing.name)}_copy` : 'my_brdf';
+    let bare = prompt(`Save as (letters, digits, _ and -, at most 64${ns ? `; saved as ${ns}NAME` : ''}):`, suggestion);
+    if (bare == null) return;
+    if (ns && bare.startsWith(ns)) bare = bare.slice(ns.length);
+    if (!NAME_RE.test(bare) || bare === 'inline' || bare === 'validate') { set({ status: `"${bare}" is not a valid BRDF name` }); return; }
+    const name = ownName(bare);
     const existing = state.library.find((b) => b.name === name);
     if (existing?.builtin) { set({ status: `"${name}" is a built-in (read-only): choose another name` }); return; }
     if (existing && !confirm(`Replace the saved BRDF "${name}"?`)) return;
@@ -242,7 +249,7 @@ export function mountEditor(el, libEl) {
   });
   $('.lib-delete').addEventListener('click', async () => {
     const e = state.editing;
-    if (!e?.name || e.builtin || !confirm(`Delete "${e.name}" and its presets? Objects using it keep rendering a scratch copy.`)) return;
+    if (!e?.name || e.builtin || !canDelete(e.name) || !confirm(`Delete "${e.name}" and its presets? Objects using it keep rendering a scratch copy.`)) return;
     try {
       // The server's scene, not only this page's copy: the reply to a switch to this BRDF made
       // just before may not have arrived yet, while the server already renders it.

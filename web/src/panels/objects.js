@@ -6,7 +6,7 @@
 import * as api from '../api.js';
 import { state, set, on } from '../state.js';
 import { coalesce } from '../coalesce.js';
-import { refreshAssets } from '../library.js';
+import { refreshAssets, isScratch } from '../library.js';
 import { backOff, backOffToFit, centreOn } from '../camera-math.js';
 import { boundingSphere } from '../mesh-bounds.js';
 
@@ -70,7 +70,7 @@ export function mountObjects(el) {
     if (!scene) return;
     const objs = scene.objects || [];
     if (sel >= objs.length) select(Math.max(0, objs.length - 1));
-    list.replaceChildren(...objs.map((o, i) => option(String(i), `${i + 1}: ${o.mesh} · ${o.brdf.startsWith('scratch-') ? 'editor' : o.brdf}`)));
+    list.replaceChildren(...objs.map((o, i) => option(String(i), `${i + 1}: ${o.mesh} · ${isScratch(o.brdf) ? 'editor' : o.brdf}`)));
     list.value = String(sel);
     $('.obj-remove').disabled = objs.length <= 1;
     const o = objs[sel];
@@ -81,7 +81,7 @@ export function mountObjects(el) {
       const textures = assets.filter((a) => a.kind === 'texture').map((a) => [a.id, label(a)]);
       for (const s of $$('.obj-tex')) if (!focused(s)) fillSelect(s, [['', '(none)'], ...textures], texName(o.textures?.[Number(s.dataset.i)]) ?? '');
       const brdfs = (state.library || []).filter((b) => !b.broken).map((b) => [b.name, b.name]);
-      if (o.brdf.startsWith('scratch-')) brdfs.unshift([o.brdf, '(the editor\'s text)']);
+      if (isScratch(o.brdf)) brdfs.unshift([o.brdf, '(the editor\'s text)']);
       if (!focused($('.obj-brdf'))) fillSelect($('.obj-brdf'), brdfs, o.brdf);
       for (const input of $$('.xyz input')) if (!focused(input)) input.value = Number(o[input.dataset.k][Number(input.dataset.i)].toFixed(4));
     }

@@ -6,7 +6,7 @@ import * as api from '../api.js';
 import { state, set, on } from '../state.js';
 import { coalesce } from '../coalesce.js';
 import { toHex, fromHex } from '../color.js';
-import { NAME_RE } from '../library.js';
+import { NAME_RE, isScratch } from '../library.js';
 
 
 export function mountParams(el) {
@@ -97,7 +97,7 @@ export function mountParams(el) {
   const presetBox = el.querySelector('.presets');
   async function loadPresets(select = '') {
     const name = state.brdf?.name;
-    presetBox.hidden = !name || name.startsWith('scratch-');   // a scratch BRDF is per tab: save it first
+    presetBox.hidden = !name || isScratch(name);   // a scratch BRDF is per tab: save it first
     if (presetBox.hidden) return;
     try {
       const names = await api.listPresets(name);
