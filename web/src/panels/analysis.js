@@ -137,9 +137,10 @@ export function mountAnalysis(el) {
       const pick = document.createElement('button');
       pick.type = 'button';
       pick.className = 'an-pick';
-      pick.innerHTML = '<i class="swatch"></i>';
-      pick.querySelector('i').style.background = s.color;
-      pick.append(s.label);
+      const swatch = document.createElement('i');
+      swatch.className = 'swatch';
+      swatch.style.background = s.color;
+      pick.append(swatch, s.label);   // the label (a BRDF name) as text
       pick.title = 'show its parameters and its slice';
       pick.addEventListener('click', () => { chosen = s.key; showLegend(); showParams(); update(); });
       const remove = document.createElement('button');
