@@ -6,6 +6,8 @@
 #include <string_view>
 #include <type_traits>
 
+#include "brdfa_server/address_range.h"
+
 #ifndef BRDFA_DEFAULT_ROOT
 #define BRDFA_DEFAULT_ROOT "."
 #endif
@@ -30,7 +32,29 @@ ParseOutcome fail(std::string message) {
   return out;
 }
 
+// The auth mode from --auth (or its default for the host) and the flags it needs; the error
+// message when they do not fit together.
+std::optional<std::string> resolveAuth(ServerConfig& config, std::optional<AuthMode> chosen) {
+  const bool loopback = isLoopbackHost(config.host);
+  config.auth.mode = chosen ? *chosen : loopback ? AuthMode::None : AuthMode::Tokens;
+  if (config.auth.mode == AuthMode::None && !loopback && !config.auth.allowUnauthenticated)
+    return "--auth none on " + config.host +
+           " would let anyone who reaches the port act as the teacher: add --allow-unauthenticated to mean it, "
+           "or use --auth tokens";
+  if (config.auth.mode == AuthMode::Proxy && config.auth.proxyFrom.empty())
+    return "--auth proxy needs --proxy-from ADDR[/BITS]: the front whose user header is trusted";
+  for (const std::string& range : config.auth.proxyFrom)
+    if (!parseAddressRange(range)) return "--proxy-from '" + range + "' is not an IPv4 or IPv6 address or ADDR/BITS range";
+  for (const std::string& name : config.auth.proxyAdmins)
+    if (!isValidUserName(name)) return "--proxy-admin '" + name + "' is not a valid user name ([a-z0-9._@-], 1-64)";
+  return std::nullopt;
+}
+
 }  // namespace
+
+bool isLoopbackHost(std::string_view host) {
+  return host == "localhost" || host == "::1" || host == "[::1]" || host.starts_with("127.");
+}
 
 bool isValidReplicaTag(std::string_view tag) {
   if (tag.empty() || tag.size() > 63 || tag.front() == '-' || tag.back() == '-') return false;
@@ -105,6 +129,20 @@ std::string usageText(const char* program) {
          "  --drain-seconds S on SIGTERM, refuse new sessions and jobs (503 draining) and let open\n"
          "                    streams and requests go on for up to S seconds, then stop (default\n"
          "                    0: stop at once). A second SIGTERM, or SIGINT, stops at once\n"
+         "  --auth MODE       who asks: none (no identities; the default on a loopback --host),\n"
+         "                    tokens (personal bearer tokens; the default elsewhere) or proxy\n"
+         "                    (a user header from a trusted front); docs/api.md, Identities\n"
+         "  --allow-unauthenticated  permit --auth none on a non-loopback --host (warns)\n"
+         "  --admin-token-file PATH  the teacher's token, its first line (default\n"
+         "                    $BRDFA_ADMIN_TOKEN, else <data-dir>/auth/admin-token, made on first start)\n"
+         "  --proxy-user-header NAME  proxy mode: the header naming the user (default X-Forwarded-User)\n"
+         "  --proxy-from ADDR[/BITS]  proxy mode: an address the header is trusted from; repeatable\n"
+         "  --proxy-admin NAME        proxy mode: a user who is a teacher; repeatable\n"
+         "  --max-sessions N  sessions on this server, `default` included (default 32)\n"
+         "  --quota-sessions N, --quota-brdfs N, --quota-uploads N, --quota-upload-bytes N,\n"
+         "  --quota-jobs N, --quota-renders N\n"
+         "                    what one student may hold (defaults 3, 100, 20, 268435456, 2, 1);\n"
+         "                    past one the answer is 429 quota_exceeded\n"
          "  --help            show this text\n"
          "On start prints one line `listening on http://HOST:PORT` to stdout.\n";
 }
@@ -116,6 +154,7 @@ ParseOutcome parse_command_line(int argc, const char* const* argv) {
   const char* envReplica = std::getenv("BRDFA_REPLICA");
   if (envReplica) config.replica = envReplica;
 
+  std::optional<AuthMode> authMode;
   for (int i = 1; i < argc; ++i) {
     std::string_view arg = argv[i];
     if (arg == "--help" || arg == "-h") {
@@ -134,6 +173,10 @@ ParseOutcome parse_command_line(int argc, const char* const* argv) {
     }
     if (arg == "--hot-load") {
       config.hotLoad = true;
+      continue;
+    }
+    if (arg == "--allow-unauthenticated") {
+      config.auth.allowUnauthenticated = true;
       continue;
     }
     // Accept both `--flag value` and `--flag=value`.
@@ -228,6 +271,37 @@ ParseOutcome parse_command_line(int argc, const char* const* argv) {
       err = takeString(config.replica);
     else if (name == "--drain-seconds")
       err = takeSeconds(0, 3600, config.drainSeconds);
+    else if (name == "--auth") {
+      std::string mode;
+      err = takeString(mode);
+      if (!err) {
+        if (mode == "none") authMode = AuthMode::None;
+        else if (mode == "tokens") authMode = AuthMode::Tokens;
+        else if (mode == "proxy") authMode = AuthMode::Proxy;
+        else err = "--auth must be none, tokens or proxy, got '" + mode + "'";
+      }
+    } else if (name == "--admin-token-file")
+      err = takeString(config.auth.adminTokenFile);
+    else if (name == "--proxy-user-header")
+      err = takeString(config.auth.proxyUserHeader);
+    else if (name == "--proxy-from" || name == "--proxy-admin") {
+      std::string value;
+      err = takeString(value);
+      if (!err) (name == "--proxy-from" ? config.auth.proxyFrom : config.auth.proxyAdmins).push_back(value);
+    } else if (name == "--max-sessions")
+      err = takeInt(2, 100000, config.maxSessions);
+    else if (name == "--quota-sessions")
+      err = takeInt(1, 100000, config.quotas.sessions);
+    else if (name == "--quota-brdfs")
+      err = takeInt(1, 1000000, config.quotas.brdfs);
+    else if (name == "--quota-uploads")
+      err = takeInt(0, 1000000, config.quotas.uploads);
+    else if (name == "--quota-upload-bytes")
+      err = takeInt(0, 1ll << 50, config.quotas.uploadBytes);
+    else if (name == "--quota-jobs")
+      err = takeInt(1, 1000, config.quotas.jobs);
+    else if (name == "--quota-renders")
+      err = takeInt(1, 1000, config.quotas.renders);
     else if (name == "--environment-dir") {
       std::string dir;
       err = takeString(dir);
@@ -243,6 +317,7 @@ ParseOutcome parse_command_line(int argc, const char* const* argv) {
   if (!config.replica.empty() && !isValidReplicaTag(config.replica))
     return fail("--replica (or $BRDFA_REPLICA) must be 1-63 of [a-z0-9-], starting and ending with a letter or "
                 "digit, got '" + config.replica + "'\n" + usageText(argv[0]));
+  if (std::optional<std::string> err = resolveAuth(config, authMode)) return fail(*err + "\n" + usageText(argv[0]));
   ParseOutcome out;
   out.config = config;
   return out;

@@ -8,7 +8,29 @@
 #include <string_view>
 #include <vector>
 
+#include "brdfa_server/identity.h"
+
 namespace brdfa::server {
+
+// How requests say who asks (docs/api.md, Identities and ownership).
+struct AuthSettings {
+  AuthMode mode = AuthMode::None;  // --auth; unset on the command line: none on loopback, else tokens
+  bool allowUnauthenticated = false;  // --allow-unauthenticated: none on a non-loopback address
+  std::string adminTokenFile;         // --admin-token-file (tokens mode)
+  std::string proxyUserHeader = "X-Forwarded-User";  // --proxy-user-header (proxy mode)
+  std::vector<std::string> proxyFrom;    // --proxy-from ADDR[/BITS], repeatable (proxy mode)
+  std::vector<std::string> proxyAdmins;  // --proxy-admin NAME, repeatable (proxy mode)
+};
+
+// What one student may hold at once; the teacher has no quota. Each has a flag of its name.
+struct Quotas {
+  int sessions = 3;                    // --quota-sessions
+  int brdfs = 100;                     // --quota-brdfs: saved BRDFs, the editor's scratch ones too
+  int uploads = 20;                    // --quota-uploads
+  uint64_t uploadBytes = 256ull << 20; // --quota-upload-bytes
+  int jobs = 2;                        // --quota-jobs: queued or running
+  int renders = 1;                     // --quota-renders: one-shot renders and analyses in flight
+};
 
 struct ServerConfig {
   std::string host = "127.0.0.1";  // DESIGN.md section 6: loopback unless told otherwise
@@ -48,7 +70,13 @@ struct ServerConfig {
   // --drain-seconds: on SIGTERM, how long open streams and requests may go on (new sessions and
   // jobs are refused with 503 `draining`, /api/ready answers 503) before the server stops.
   double drainSeconds = 0;
+  AuthSettings auth;
+  Quotas quotas;
+  int maxSessions = 32;  // --max-sessions: on this server, `default` included
 };
+
+// Whether `host` is a loopback address (127.0.0.0/8, ::1, localhost).
+bool isLoopbackHost(std::string_view host);
 
 // Whether `tag` may be a replica tag: 1-63 of [a-z0-9-], starting and ending alphanumeric.
 bool isValidReplicaTag(std::string_view tag);
