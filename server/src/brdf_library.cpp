@@ -9,16 +9,28 @@
 #include <sstream>
 
 #include "brdfa_server/atomic_file.h"
+#include "brdfa_server/identity.h"
 
 namespace brdfa::server {
 
-bool isReservedBrdfName(std::string_view name) { return name == "inline" || name == "validate"; }
+bool isReservedBrdfName(std::string_view name) { return name == "inline" || name == "validate" || name == "presets"; }
 
 bool isValidBrdfName(std::string_view name) {
   if (name.empty() || name.size() > 64 || isReservedBrdfName(name)) return false;
   return std::all_of(name.begin(), name.end(), [](char c) {
     return (c >= 'A' && c <= 'Z') || (c >= 'a' && c <= 'z') || (c >= '0' && c <= '9') || c == '_' || c == '-';
   });
+}
+
+bool isValidQualifiedBrdfName(std::string_view name) {
+  const size_t slash = name.find('/');
+  if (slash == std::string_view::npos) return isValidBrdfName(name);
+  return isValidUserName(name.substr(0, slash)) && isValidBrdfName(name.substr(slash + 1));
+}
+
+std::string_view brdfNameOwner(std::string_view name) {
+  const size_t slash = name.find('/');
+  return slash == std::string_view::npos ? std::string_view() : name.substr(0, slash);
 }
 
 namespace {
@@ -41,13 +53,23 @@ bool readWholeFile(const std::filesystem::path& path, std::string& out) {
 }
 
 std::shared_ptr<const BrdfEntry> makeEntry(const std::string& name, std::string source, BrdfDefinition definition,
-                                           bool builtin) {
+                                           bool builtin, const std::string& owner = {}, bool shared = false) {
   auto entry = std::make_shared<BrdfEntry>();
   entry->name = name;
   entry->source = std::move(source);
   entry->definition = std::make_shared<const BrdfDefinition>(std::move(definition));
   entry->builtin = builtin;
+  entry->owner = owner;
+  entry->shared = shared;
   return entry;
+}
+
+// The same entry with another sharing (entries are immutable: scenes may hold the old one).
+std::shared_ptr<const BrdfEntry> withShared(const std::shared_ptr<const BrdfEntry>& e, bool shared) {
+  if (e->shared == shared) return e;
+  auto copy = std::make_shared<BrdfEntry>(*e);
+  copy->shared = shared;
+  return copy;
 }
 
 std::string errorText(const Error& e) {
@@ -59,7 +81,7 @@ std::string errorText(const Error& e) {
 // Calls `fn(name, path)` for every regular <dir>/<name>.brdf with a valid name (messages for
 // the others). False when the folder cannot be read.
 template <class Fn>
-bool forEachBrdfFile(const std::string& dir, std::vector<std::string>& messages, Fn fn) {
+bool forEachBrdfFile(const std::string& dir, std::vector<std::string>& messages, Fn fn, const std::string& owner = {}) {
   namespace fs = std::filesystem;
   std::error_code ec;
   fs::directory_iterator it(dir, ec);
@@ -75,7 +97,7 @@ bool forEachBrdfFile(const std::string& dir, std::vector<std::string>& messages,
       messages.push_back("skipping " + path.string() + ": not a valid BRDF name");
       continue;
     }
-    fn(name, path);
+    fn(owner.empty() ? name : owner + "/" + name, path);
   }
   return true;
 }
@@ -103,7 +125,7 @@ std::vector<std::string> BrdfLibrary::loadBuiltins(const std::string& dir) {
   return messages;
 }
 
-std::vector<std::string> BrdfLibrary::loadUserDir(const std::string& dir) {
+std::vector<std::string> BrdfLibrary::loadUserDir(const std::string& dir, const std::string& owner) {
   std::vector<std::string> messages;
   std::error_code ec;
   std::filesystem::create_directories(dir, ec);
@@ -113,6 +135,7 @@ std::vector<std::string> BrdfLibrary::loadUserDir(const std::string& dir) {
   {
     std::lock_guard store(storeMutex_);
     userDir_ = dir;
+    owner_ = owner;
   }
   std::lock_guard refresh(refreshMutex_);
   seenDirStamp_ = directoryStamp();
@@ -154,6 +177,8 @@ void BrdfLibrary::rescanUserDirLocked(std::vector<std::string>* log) {
   std::map<std::string, FileStamp, std::less<>> stamps;
   if (!forEachBrdfFile(userDir_, messages, [&](const std::string& name, const std::filesystem::path& path) {
         auto it = current.find(name);
+        std::error_code markerError;
+        const bool shared = !owner_.empty() && std::filesystem::exists(sharedMarkerPath(name), markerError);
         if (it != current.end() && it->second->builtin) {
           messages.push_back("skipping " + path.string() + ": a built-in BRDF has that name");
           return;
@@ -169,11 +194,12 @@ void BrdfLibrary::rescanUserDirLocked(std::vector<std::string>* log) {
           auto seen = fileStamps_.find(name);
           if (seen != fileStamps_.end() && seen->second == stamp) {
             if (it != current.end()) {
-              loaded[name] = it->second;
+              loaded[name] = withShared(it->second, shared);
               return;
             }
             if (auto b = currentBroken.find(name); b != currentBroken.end()) {
               broken[name] = b->second;
+              broken[name].shared = shared;
               return;
             }
           }
@@ -183,23 +209,24 @@ void BrdfLibrary::rescanUserDirLocked(std::vector<std::string>* log) {
           // Gone between the listing and the read (another replica's delete) is not broken.
           if (!std::filesystem::exists(path)) return;
           messages.push_back("user BRDF " + path.string() + " cannot be read; listed as broken");
-          broken[name] = BrokenBrdf{name, "", makeError(ErrorCode::Internal, "cannot read " + path.string())};
+          broken[name] =
+              BrokenBrdf{name, "", makeError(ErrorCode::Internal, "cannot read " + path.string()), owner_, shared};
           return;
         }
         // Unchanged: keep the entry (and its definition) that scenes already resolved.
         if (it != current.end() && it->second->source == text) {
-          loaded[name] = it->second;
+          loaded[name] = withShared(it->second, shared);
           return;
         }
         Result<BrdfDefinition> parsed = parseBrdf(text);
         if (!parsed) {
           messages.push_back("user BRDF " + path.string() + " does not parse; listed as broken: " +
                              errorText(parsed.error()));
-          broken[name] = BrokenBrdf{name, std::move(text), parsed.takeError()};
+          broken[name] = BrokenBrdf{name, std::move(text), parsed.takeError(), owner_, shared};
           return;
         }
-        loaded[name] = makeEntry(name, std::move(text), std::move(parsed.value()), false);
-      })) {
+        loaded[name] = makeEntry(name, std::move(text), std::move(parsed.value()), false, owner_, shared);
+      }, owner_)) {
     if (log) log->insert(log->end(), messages.begin(), messages.end());
     return;  // an unreadable folder changes nothing
   }
@@ -216,7 +243,41 @@ void BrdfLibrary::rescanUserDirLocked(std::vector<std::string>* log) {
 
 std::string BrdfLibrary::userFilePath(std::string_view name) const {
   if (userDir_.empty()) return {};
-  return (std::filesystem::path(userDir_) / (std::string(name) + ".brdf")).string();
+  const std::string_view stem = owner_.empty() ? name : name.substr(owner_.size() + 1);
+  return (std::filesystem::path(userDir_) / (std::string(stem) + ".brdf")).string();
+}
+
+std::string BrdfLibrary::sharedMarkerPath(std::string_view name) const {
+  std::string path = userFilePath(name);
+  return path.substr(0, path.size() - 5) + ".shared";
+}
+
+size_t BrdfLibrary::userEntryCount() const {
+  refreshUserDir();
+  std::lock_guard lock(mutex_);
+  size_t n = broken_.size();
+  for (const auto& [name, entry] : entries_) n += entry->builtin ? 0 : 1;
+  return n;
+}
+
+Result<bool> BrdfLibrary::setShared(std::string_view name, bool shared) {
+  std::lock_guard store(storeMutex_);
+  {
+    std::lock_guard lock(mutex_);
+    auto it = entries_.find(name);
+    if ((it == entries_.end() || it->second->builtin) && !broken_.count(name)) return false;
+  }
+  const std::string marker = sharedMarkerPath(name);
+  if (shared) {
+    Result<void> written = writeFileAtomically(marker, "");
+    if (!written) return written.takeError();
+  } else if (Result<void> removed = removeFileDurably(marker); !removed && removed.error().code != ErrorCode::NotFound) {
+    return removed.takeError();
+  }
+  std::lock_guard lock(mutex_);
+  if (auto it = entries_.find(name); it != entries_.end()) it->second = withShared(it->second, shared);
+  if (auto it = broken_.find(name); it != broken_.end()) it->second.shared = shared;
+  return true;
 }
 
 std::vector<BrokenBrdf> BrdfLibrary::listBroken() const {
@@ -253,12 +314,21 @@ std::vector<std::shared_ptr<const BrdfEntry>> BrdfLibrary::list() const {
 
 BrdfLibrary::PutOutcome BrdfLibrary::putUser(std::string name, std::string source,
                                              std::shared_ptr<const BrdfDefinition> def, Error* storeError,
-                                             std::shared_ptr<const BrdfEntry>* stored) {
+                                             std::shared_ptr<const BrdfEntry>* stored, size_t maxEntries) {
+  if (maxEntries > 0) refreshUserDir();  // the count below is of what the folder holds now
   std::lock_guard store(storeMutex_);
+  bool shared = false;
   {
     std::lock_guard lock(mutex_);
     auto it = entries_.find(name);
     if (it != entries_.end() && it->second->builtin) return PutOutcome::BuiltinConflict;
+    const bool exists = it != entries_.end() || broken_.count(name);
+    shared = it != entries_.end() ? it->second->shared : exists && broken_.find(name)->second.shared;
+    if (maxEntries > 0 && !exists) {
+      size_t n = broken_.size();
+      for (const auto& [other, entry] : entries_) n += entry->builtin ? 0 : 1;
+      if (n >= maxEntries) return PutOutcome::QuotaExceeded;
+    }
   }
   // Built-ins never change after start-up, so the check above still holds after the write.
   if (!userDir_.empty()) {
@@ -273,6 +343,8 @@ BrdfLibrary::PutOutcome BrdfLibrary::putUser(std::string name, std::string sourc
   entry->source = std::move(source);
   entry->definition = std::move(def);
   entry->builtin = false;
+  entry->owner = owner_;
+  entry->shared = shared;
   std::lock_guard lock(mutex_);
   auto it = entries_.find(name);
   PutOutcome outcome = it == entries_.end() && !broken_.count(name) ? PutOutcome::Created : PutOutcome::Replaced;
@@ -302,18 +374,13 @@ BrdfLibrary::RemoveOutcome BrdfLibrary::remove(std::string_view name, Error* sto
     if (auto it = entries_.find(name); it != entries_.end()) entries_.erase(it);
     if (auto it = broken_.find(name); it != broken_.end()) broken_.erase(it);
   }
-  // Its presets go with it, still under the store lock, so a later BRDF of the same name
-  // starts without stale ones (the BRDF is gone either way: a leftover preset file is
+  // Its sharing and (through the hook) its presets go with it, still under the store lock, so a later BRDF of the
+  // same name starts without stale ones (the BRDF is gone either way: a leftover preset file is
   // unreachable until then and is removed by the next remove of that name).
-  if (!presetRoot_.empty()) {
-    std::error_code ec;
-    std::filesystem::remove_all(presetDir(name), ec);
-  }
+  if (!owner_.empty()) (void)removeFileDurably(sharedMarkerPath(name));  // absent when never shared
+  if (removeHook_) removeHook_(name);
   return RemoveOutcome::Removed;
 }
 
-std::string BrdfLibrary::presetDir(std::string_view name) const {
-  return (std::filesystem::path(presetRoot_) / std::string(name)).string();
-}
 
 }  // namespace brdfa::server

@@ -5,6 +5,7 @@
 #pragma once
 
 #include <cstdint>
+#include <functional>
 #include <map>
 #include <memory>
 #include <mutex>
@@ -21,13 +22,19 @@ namespace brdfa::server {
 
 // The web UI's per-tab working copies are user BRDFs named scratch-<session>: a batch test of
 // "all" leaves them out (they are someone's unsaved edit, not the library).
-inline bool isScratchBrdf(std::string_view name) { return name.substr(0, 8) == "scratch-"; }
+// A student's are alice/scratch-<session>.
+inline bool isScratchBrdf(std::string_view name) {
+  const size_t slash = name.find('/');
+  return name.substr(slash == std::string_view::npos ? 0 : slash + 1, 8) == "scratch-";
+}
 
 struct BrdfEntry {
-  std::string name;
+  std::string name;    // "ggx", "my_ggx" (the course's), "alice/my_ggx" (a student's)
   std::string source;  // the .brdf text as submitted
   std::shared_ptr<const BrdfDefinition> definition;
   bool builtin = false;
+  std::string owner;    // the student whose name it is under; "" for built-ins and the course
+  bool shared = false;  // a student's, marked readable by everyone
 };
 
 // A saved user file that did not parse at start-up. Listed (with its error) so the user can see
@@ -36,12 +43,18 @@ struct BrokenBrdf {
   std::string name;
   std::string source;
   Error error;  // CompileError with diagnostics, or why the file could not be read
+  std::string owner;  // as BrdfEntry::owner
+  bool shared = false;
 };
 
-// Names a client may give a BRDF: [A-Za-z0-9_-]{1,64}, minus the reserved ones.
+// Names a client may give a BRDF or a preset: [A-Za-z0-9_-]{1,64}, minus the reserved ones.
 bool isValidBrdfName(std::string_view name);
-// "inline" (one-shot render's brdf_source) and "validate" (a route) cannot be stored.
+// "inline" (one-shot render's brdf_source), "validate" and "presets" (routes) cannot be stored.
 bool isReservedBrdfName(std::string_view name);
+// A BRDF's full name: a valid name, or <user>/<name> with a valid user name (identity.h).
+bool isValidQualifiedBrdfName(std::string_view name);
+// The owner part of a full name ("alice" of "alice/my_ggx"; "" for a bare name).
+std::string_view brdfNameOwner(std::string_view name);
 
 class BrdfLibrary {
  public:
@@ -53,8 +66,10 @@ class BrdfLibrary {
   // Makes `dir` the user store: removes stale temp files, then loads every <dir>/*.brdf as a
   // user BRDF (parsed only). A file that fails to parse becomes a BrokenBrdf; a file named like
   // a built-in (or not a valid name) is skipped. Later putUser/remove write to / unlink in `dir`.
+  // With an `owner`, the store is that student's: its entries are named <owner>/<file stem>
+  // and owned by them, and <stem>.shared beside a file marks it shared.
   // Returns one message per skipped or broken file for the log.
-  std::vector<std::string> loadUserDir(const std::string& dir);
+  std::vector<std::string> loadUserDir(const std::string& dir, const std::string& owner = {});
 
   std::shared_ptr<const BrdfEntry> find(std::string_view name) const;
   std::vector<std::shared_ptr<const BrdfEntry>> list() const;  // sorted by name
@@ -62,21 +77,29 @@ class BrdfLibrary {
   std::vector<BrokenBrdf> listBroken() const;  // sorted by name
   std::optional<BrokenBrdf> findBroken(std::string_view name) const;
 
-  enum class PutOutcome { Created, Replaced, BuiltinConflict, StoreFailed };
+  enum class PutOutcome { Created, Replaced, BuiltinConflict, StoreFailed, QuotaExceeded };
   // Stores a user BRDF unless a built-in holds that name (built-ins are read-only). With a user
   // store, the file is written atomically first; when that fails (StoreFailed, `storeError` set)
-  // nothing changes.
+  // nothing changes. A new name when the store already holds `maxEntries` (0: no limit) user
+  // files is QuotaExceeded. A replaced BRDF keeps its sharing.
   // `stored`, when given, receives the entry this call stored (a concurrent remove may already
   // have taken it out of the library again by the time the caller looks).
   PutOutcome putUser(std::string name, std::string source, std::shared_ptr<const BrdfDefinition> def,
-                     Error* storeError = nullptr, std::shared_ptr<const BrdfEntry>* stored = nullptr);
+                     Error* storeError = nullptr, std::shared_ptr<const BrdfEntry>* stored = nullptr,
+                     size_t maxEntries = 0);
+  // User files in the store (broken ones too).
+  size_t userEntryCount() const;
+
+  // Marks a student's BRDF shared or not (its marker file); false when there is no such BRDF.
+  Result<bool> setShared(std::string_view name, bool shared);
+
+  // Called with a BRDF's name under the store lock whenever remove() took it out: the catalog
+  // (brdf_catalog.h) removes every person's presets of it there.
+  void onRemoved(std::function<void(std::string_view)> hook) { removeHook_ = std::move(hook); }
 
   enum class RemoveOutcome { Removed, NotFound, Builtin, StoreFailed };
-  // Removes a user BRDF (or a broken one), its file and its presets (<preset root>/<name>).
+  // Removes a user BRDF (or a broken one), its file, its sharing, and calls the remove hook.
   RemoveOutcome remove(std::string_view name, Error* storeError = nullptr);
-  // Where presets live: <root>/<brdf name>/<preset>.json. Set once, before serving.
-  void setPresetRoot(std::string root) { presetRoot_ = std::move(root); }
-  std::string presetDir(std::string_view name) const;
   // Runs op(entry) (entry null when no BRDF holds `name`) while no BRDF is stored or removed:
   // a preset written or removed in op never interleaves with its BRDF's removal, so a preset
   // can neither outlive its BRDF nor pass to a later BRDF of the same name.
@@ -108,11 +131,14 @@ class BrdfLibrary {
   };
   std::map<std::string, FileStamp, std::less<>> fileStamps_;
 
+  // <store>/<stem>.shared, the marker of a shared BRDF.
+  std::string sharedMarkerPath(std::string_view name) const;
   mutable std::mutex mutex_;
   // Serializes file writes with the map update, so the file on disk and the entry agree.
   std::mutex storeMutex_;
   std::string userDir_;  // set once by loadUserDir, before serving
-  std::string presetRoot_;  // set once by setPresetRoot, before serving; empty: no presets
+  std::string owner_;    // set once by loadUserDir: "" for the course store
+  std::function<void(std::string_view)> removeHook_;
   std::map<std::string, std::shared_ptr<const BrdfEntry>, std::less<>> entries_;
   std::map<std::string, BrokenBrdf, std::less<>> broken_;
 };
