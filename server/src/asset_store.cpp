@@ -188,6 +188,7 @@ std::optional<AssetRecord> recordFromMetadata(const json& j, const std::string& 
   r.layout = str("layout").value_or("");
   r.name = sanitizeUploadFileName(str("name").value_or(""));
   r.created = str("created").value_or("");
+  r.owner = str("owner").value_or("");  // absent in uploads of the single-user layout: the course's
   return r;
 }
 
@@ -205,6 +206,7 @@ const char* assetRejectionName(AssetRejection reason) {
     case AssetRejection::StorageFull: return "storage_full";
     case AssetRejection::Busy: return "busy";
     case AssetRejection::StorageError: return "storage_error";
+    case AssetRejection::QuotaExceeded: return "quota_exceeded";
   }
   return "invalid";
 }
@@ -225,6 +227,7 @@ json assetToJson(const AssetRecord& r) {
     j["vertices"] = r.vertices;
     j["triangles"] = r.triangles;
     j["created"] = r.created;
+    j["owner"] = r.owner.empty() ? json(nullptr) : json(r.owner);
   }
   return j;
 }
@@ -397,7 +400,8 @@ std::string AssetStore::newId(AssetKind kind) const {
   }
 }
 
-Result<AssetRecord> AssetStore::add(const AssetUpload& up, AssetRejection& rejection) {
+Result<AssetRecord> AssetStore::add(const AssetUpload& up, AssetRejection& rejection, const AssetOwner& owner,
+                                    AssetQuotaHit* quotaHit) {
   auto refuse = [&](AssetRejection why, std::string message, std::string field = "file") {
     rejection = why;
     return makeError(ErrorCode::InvalidArgument, std::move(message), std::move(field));
@@ -437,8 +441,28 @@ Result<AssetRecord> AssetStore::add(const AssetUpload& up, AssetRejection& rejec
     return refuse(AssetRejection::Mislabelled, "the part's Content-Type '" + up.contentType.substr(0, 128) +
                                                    "' contradicts its content (" + formatTitle(*format) + ")");
 
-  // Under mutex_: the caps, counting uploads being written.
+  // Under mutex_: the uploader's quota, then the server's caps, counting uploads being written
+  // (the uploader's own in-flight ones count as kept: `reservedBy`).
+  std::map<std::string, std::pair<size_t, uint64_t>>& inFlight = reservedBy_;
+  auto overQuota = [&]() -> std::optional<Error> {
+    if (owner.maxUploads == 0 && owner.maxBytes == 0) return std::nullopt;
+    size_t count = inFlight[owner.user].first;
+    uint64_t bytes = inFlight[owner.user].second;
+    for (const auto& [id, r] : uploads_)
+      if (r.owner == owner.user) ++count, bytes += r.bytes;
+    AssetQuotaHit hit;
+    if (owner.maxUploads > 0 && count >= owner.maxUploads) hit = {"uploads", owner.maxUploads, count};
+    else if (owner.maxBytes > 0 && bytes + up.size > owner.maxBytes) hit = {"upload_bytes", owner.maxBytes, bytes};
+    else return std::nullopt;
+    if (quotaHit) *quotaHit = hit;
+    return refuse(AssetRejection::QuotaExceeded, hit.quota == "uploads"
+                                                     ? "you keep " + std::to_string(count) + " uploads, the most one person may"
+                                                     : "your uploads hold " + std::to_string(bytes) + " bytes; with this file's " +
+                                                           std::to_string(up.size) + " they would pass your " +
+                                                           std::to_string(owner.maxBytes) + "-byte quota");
+  };
   auto storageFull = [&]() -> std::optional<Error> {
+    if (auto quota = overQuota()) return quota;
     if (uploads_.size() + reserved_ >= limits_.maxAssets)
       return refuse(AssetRejection::StorageFull, "the server keeps at most " + std::to_string(limits_.maxAssets) +
                                                      " uploads (--max-assets); none can be added");
@@ -482,6 +506,7 @@ Result<AssetRecord> AssetStore::add(const AssetUpload& up, AssetRejection& rejec
   rec.width = info->width;
   rec.height = info->height;
   rec.created = nowIso8601();
+  rec.owner = owner.user;
   {
     std::lock_guard lock(mutex_);
     if (auto full = storageFull()) return *full;
@@ -489,6 +514,8 @@ Result<AssetRecord> AssetStore::add(const AssetUpload& up, AssetRejection& rejec
     writing_.insert(rec.id);
     ++reserved_;
     reservedBytes_ += up.size;
+    ++inFlight[owner.user].first;
+    inFlight[owner.user].second += up.size;
   }
 
   // The data file first, then the metadata: a metadata file always names a complete file.
@@ -503,6 +530,8 @@ Result<AssetRecord> AssetStore::add(const AssetUpload& up, AssetRejection& rejec
   writing_.erase(rec.id);
   --reserved_;
   reservedBytes_ -= up.size;
+  if (auto it = inFlight.find(owner.user); it != inFlight.end() && --it->second.first == 0) inFlight.erase(it);
+  else if (it != inFlight.end()) it->second.second -= up.size;
   if (!written) {
     (void)removeFileDurably(meta);
     (void)removeFileDurably(data);
@@ -529,11 +558,25 @@ void AssetStore::refreshFromDisk() const {
   {
     std::lock_guard lock(mutex_);
     std::error_code ec;
+    std::set<std::string> present;
     for (fs::directory_iterator it(dir_, ec), end; !ec && it != end; it.increment(ec)) {
       const fs::path& p = it->path();
       const std::string stem = p.stem().string();
-      if (p.extension() == ".json" && validId(stem) && !uploads_.count(stem) && !writing_.count(stem))
-        fresh.push_back(stem);
+      if (p.extension() != ".json" || !validId(stem)) continue;
+      present.insert(stem);
+      if (!uploads_.count(stem) && !writing_.count(stem) && !removed_.count(stem)) fresh.push_back(stem);
+    }
+    // Another server removed these (a listing that failed part-way removes nothing). Like
+    // loadOne, this changes what the store holds from a const lookup.
+    AssetStore& self = const_cast<AssetStore&>(*this);
+    for (auto it = self.uploads_.begin(); !ec && it != self.uploads_.end();) {
+      if (present.count(it->first) || writing_.count(it->first)) {
+        ++it;
+        continue;
+      }
+      self.storedBytes_ -= it->second.bytes;
+      self.removed_.insert(it->first);
+      it = self.uploads_.erase(it);
     }
   }
   for (const std::string& id : fresh)
@@ -568,6 +611,30 @@ std::vector<AssetRecord> AssetStore::list(std::optional<AssetKind> kind) const {
                      [](const AssetRecord& a, const AssetRecord& b) { return a.created < b.created; });
   }
   return out;
+}
+
+Result<bool> AssetStore::remove(const std::string& id) {
+  AssetRecord record;
+  {
+    std::lock_guard lock(mutex_);
+    auto it = uploads_.find(id);
+    if (it == uploads_.end()) return false;
+    record = std::move(it->second);
+    uploads_.erase(it);
+    storedBytes_ -= record.bytes;
+    removed_.insert(id);
+  }
+  Result<void> gone = removeFileDurably(fs::path(dir_) / (id + ".json"));
+  if (gone) gone = removeFileDurably(fs::path(dir_) / (id + "." + storedExtension(*record.format)));
+  if (!gone && gone.error().code != ErrorCode::NotFound) return gone.takeError();
+  return true;
+}
+
+bool AssetStore::visible(std::string_view name, const std::string& user, bool teacher) const {
+  std::lock_guard lock(mutex_);
+  if (removed_.count(name)) return false;
+  auto it = uploads_.find(std::string(name));
+  return it == uploads_.end() || teacher || it->second.owner.empty() || it->second.owner == user;
 }
 
 std::optional<AssetRecord> AssetStore::find(const std::string& id) const {

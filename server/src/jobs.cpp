@@ -85,8 +85,27 @@ bool JobManager::makeRoomLocked() {
   return true;
 }
 
-std::optional<std::string> JobManager::submitRunner(std::string kind, json request, JobRunner run) {
+bool JobManager::ownerHasRoomLocked(const JobOwner& owner, JobSubmitted& out) const {
+  if (owner.maxOpen == 0) return true;
+  size_t open = 0;
+  for (const auto& j : jobs_) open += j->owner == owner.user && !j->over();
+  if (open < owner.maxOpen) return true;
+  out.quotaFull = true;
+  out.ownerOpen = open;
+  return false;
+}
+
+std::optional<std::string> JobManager::ownerOf(const std::string& id) const {
+  std::lock_guard lock(mutex_);
+  for (const auto& j : jobs_)
+    if (j->id == id) return j->owner;
+  return std::nullopt;
+}
+
+JobSubmitted JobManager::submitRunner(std::string kind, json request, JobRunner run, const JobOwner& owner) {
+  JobSubmitted out;
   auto job = std::make_shared<Job>();
+  job->owner = owner.user;
   job->kind = std::move(kind);
   job->request = std::move(request);
   job->runner = std::move(run);
@@ -94,7 +113,7 @@ std::optional<std::string> JobManager::submitRunner(std::string kind, json reque
     std::lock_guard lock(mutex_);
     size_t open = 0;
     for (const auto& j : jobs_) open += j->isRunner() && !j->over();
-    if (open >= kMaxOpenRunnerJobs || !makeRoomLocked()) return std::nullopt;
+    if (!ownerHasRoomLocked(owner, out) || open >= kMaxOpenRunnerJobs || !makeRoomLocked()) return out;
     job->id = idPrefix_ + "job-" + std::to_string(nextId_++);
     jobs_.push_back(job);
     if (stopping_) {
@@ -105,7 +124,8 @@ std::optional<std::string> JobManager::submitRunner(std::string kind, json reque
     }
   }
   runnerCv_.notify_all();
-  return job->id;
+  out.id = job->id;
+  return out;
 }
 
 bool JobManager::cancel(const std::string& id) {
@@ -161,20 +181,23 @@ void JobManager::runnerLoop() {
   }
 }
 
-std::optional<std::string> JobManager::submit(std::vector<JobItem> items) {
+JobSubmitted JobManager::submit(std::vector<JobItem> items, const JobOwner& owner) {
+  JobSubmitted out;
   auto job = std::make_shared<Job>();
+  job->owner = owner.user;
   job->items = std::move(items);
   job->results.resize(job->items.size());
   {
     std::lock_guard lock(mutex_);
-    if (!makeRoomLocked()) return std::nullopt;
+    if (!ownerHasRoomLocked(owner, out) || !makeRoomLocked()) return out;
     job->id = idPrefix_ + "job-" + std::to_string(nextId_++);
     jobs_.push_back(job);
     if (!stopping_)
       for (size_t i = 0; i < job->items.size(); ++i) queue_.push_back(Task{job, i});
   }
   cv_.notify_all();
-  return job->id;
+  out.id = job->id;
+  return out;
 }
 
 std::optional<json> JobManager::describe(const std::string& id) const {

@@ -15,8 +15,8 @@ void addToRunningMean(double& mean, double ms) { mean = mean > 0 ? 0.8 * mean + 
 }  // namespace
 
 Session::Session(std::string id, std::unique_ptr<RenderView> view, std::chrono::milliseconds idleTimeout,
-                 ServiceMetrics* metrics)
-    : id_(std::move(id)), view_(std::move(view)), idleTimeout_(idleTimeout), metrics_(metrics) {
+                 ServiceMetrics* metrics, SessionOwnership ownership)
+    : id_(std::move(id)), ownership_(std::move(ownership)), view_(std::move(view)), idleTimeout_(idleTimeout), metrics_(metrics) {
   thread_ = std::thread([this] { guarded(&Session::renderLoop); });
   encoder_ = std::thread([this] { guarded(&Session::encodeLoop); });
 }

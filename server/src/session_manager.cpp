@@ -2,6 +2,8 @@
 
 #include <random>
 
+#include "brdfa_server/auth_crypto.h"
+
 namespace brdfa::server {
 
 SessionManager::SessionManager(std::shared_ptr<Renderer> renderer, std::chrono::milliseconds idleTimeout,
@@ -14,12 +16,12 @@ SessionManager::SessionManager(std::shared_ptr<Renderer> renderer, std::chrono::
       idPrefix_(std::move(idPrefix)),
       metrics_(metrics) {}
 
-std::shared_ptr<Session> SessionManager::takeAbandonedLocked() {
+std::shared_ptr<Session> SessionManager::takeAbandonedLocked(const std::string* owner) {
   const auto now = Session::Clock::now();
   auto oldest = sessions_.end();
   std::chrono::milliseconds longest{-1};
   for (auto it = sessions_.begin(); it != sessions_.end(); ++it) {
-    if (it->first == kDefaultSessionId) continue;
+    if (it->first == kDefaultSessionId || (owner && it->second->owner() != *owner)) continue;
     const auto idle = it->second->inactiveFor(now);
     if (idle >= reclaimAfter_ && idle > longest) {
       longest = idle;
@@ -30,6 +32,12 @@ std::shared_ptr<Session> SessionManager::takeAbandonedLocked() {
   std::shared_ptr<Session> taken = std::move(oldest->second);
   sessions_.erase(oldest);
   return taken;
+}
+
+size_t SessionManager::countOwnedLocked(const std::string& owner) const {
+  size_t n = 0;
+  for (const auto& [id, s] : sessions_) n += id != kDefaultSessionId && s->owner() == owner;
+  return n;
 }
 
 SessionManager::~SessionManager() { stopAll(); }
@@ -44,13 +52,20 @@ std::string SessionManager::randomId() {
   return id;
 }
 
-SessionManager::Created SessionManager::create(const std::string& requestedId) {
+SessionManager::Created SessionManager::create(const std::string& requestedId, SessionOwnership ownership,
+                                               size_t ownerLimit) {
   Created out;
   std::vector<std::shared_ptr<Session>> reclaimed;  // stopped outside the lock (joins threads)
   // Whether a session may be added now; checked before and after the unlocked createView,
   // since another create may fill the last slot (or the server stop) meanwhile. A full server
-  // first reclaims an abandoned session. Holds mutex_.
+  // first reclaims an abandoned session, an owner at their limit their own. Holds mutex_.
   auto refused = [&] {
+    if (!stopped_ && ownerLimit > 0 && countOwnedLocked(ownership.user) >= ownerLimit)
+      if (auto abandoned = takeAbandonedLocked(&ownership.user)) reclaimed.push_back(std::move(abandoned));
+    if (!stopped_ && ownerLimit > 0 && (out.ownerSessions = countOwnedLocked(ownership.user)) >= ownerLimit) {
+      out.quotaFull = true;
+      return true;
+    }
     if (!stopped_ && sessions_.size() >= maxSessions_)
       if (auto abandoned = takeAbandonedLocked()) reclaimed.push_back(std::move(abandoned));
     if (stopped_) out.error = makeError(ErrorCode::DeviceError, "server is shutting down");
@@ -80,7 +95,9 @@ SessionManager::Created SessionManager::create(const std::string& requestedId) {
     if (!refusedNow) {
       std::string id = requestedId;
       while (id.empty() || sessions_.count(id)) id = idPrefix_ + randomId();
-      auto session = std::make_shared<Session>(id, std::move(view.value()), idleTimeout_, metrics_);
+      ownership.viewKey = randomBase64Url(16);
+      auto session =
+          std::make_shared<Session>(id, std::move(view.value()), idleTimeout_, metrics_, std::move(ownership));
       sessions_[id] = session;
       out.session = std::move(session);
     }

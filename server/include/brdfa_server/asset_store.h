@@ -55,6 +55,20 @@ enum class AssetRejection {
   StorageFull,    // --max-assets or --max-assets-bytes reached
   Busy,           // no inspection slot within the wait (or shutting down)
   StorageError,   // writing the files failed
+  QuotaExceeded,  // the uploader's own count or bytes (AssetOwner) would be exceeded
+};
+
+// Who uploads, and what they may keep; 0: no limit.
+struct AssetOwner {
+  std::string user;  // "" for the course (the teacher's uploads, every upload in none mode)
+  size_t maxUploads = 0;
+  uint64_t maxBytes = 0;
+};
+
+// Which per-person limit an upload hit, for the 429 (quota "uploads" or "upload_bytes").
+struct AssetQuotaHit {
+  std::string quota;
+  uint64_t limit = 0, used = 0;
 };
 const char* assetRejectionName(AssetRejection reason);  // "empty", "too_large", ...
 
@@ -69,6 +83,7 @@ struct AssetRecord {
   uint64_t bytes = 0, vertices = 0, triangles = 0;
   int width = 0, height = 0;
   std::string created;                // uploads: ISO 8601 UTC
+  std::string owner;                  // uploads: the uploader; "" for the course's and others
 };
 
 class AssetStore {
@@ -84,7 +99,16 @@ class AssetStore {
 
   // Validates and stores one upload; on success the asset is registered and usable in scenes.
   // On failure `rejection` says why (Error code InvalidArgument/Unsupported -> 400, Internal).
-  Result<AssetRecord> add(const AssetUpload& upload, AssetRejection& rejection);
+  // `quotaHit` is filled when the rejection is QuotaExceeded.
+  Result<AssetRecord> add(const AssetUpload& upload, AssetRejection& rejection, const AssetOwner& owner = {},
+                          AssetQuotaHit* quotaHit = nullptr);
+  // Forgets an upload and removes its files (metadata first: without it the data file is
+  // never loaded again). Scenes already using it keep it until they change; new scenes cannot
+  // name it (visible()). false for an unknown id or one that is not an upload.
+  Result<bool> remove(const std::string& id);
+  // Whether a scene of `user` may name asset `name` (teacher: any): built-ins and Blender
+  // worlds yes, an upload when it is the course's or theirs, a removed upload never.
+  bool visible(std::string_view name, const std::string& user, bool teacher) const;
 
   // Every asset: built-ins, Blender worlds, uploads; grouped by kind (mesh, texture,
   // environment), then source in that order, uploads by creation time.
@@ -95,7 +119,8 @@ class AssetStore {
 
   // Registers the uploads that other servers sharing the folder stored since the last look
   // (their metadata file is the acknowledgment: written after the data file). Cheap when the
-  // folder is unchanged: one stat(). Uploads are never deleted, so nothing is unregistered.
+  // folder is unchanged: one stat(). Uploads whose metadata is gone (removed by another
+  // server) are forgotten.
   void refreshFromDisk() const;
 
   // The folder of stored uploads: <dataDir>/assets.
@@ -120,11 +145,14 @@ class AssetStore {
   std::map<std::string, AssetRecord> uploads_;  // by id
   std::map<std::string, AssetRecord> blender_;  // by name
   std::set<std::string> writing_;  // ids this server is storing now (not another's to pick up)
+  std::set<std::string, std::less<>> removed_;  // uploads removed since start (still registered)
   mutable std::mutex refreshMutex_;  // order: refreshMutex_ before mutex_
   mutable int64_t seenDirStamp_ = -2;  // the folder's mtime (ns) at the last refreshFromDisk
   size_t reserved_ = 0;          // uploads being written (count toward the cap)
   uint64_t reservedBytes_ = 0;
   uint64_t storedBytes_ = 0;
+  // Uploads being written, per uploader: count and bytes (they count toward AssetOwner's limits).
+  std::map<std::string, std::pair<size_t, uint64_t>> reservedBy_;
 };
 
 // The JSON of an asset as GET /api/assets answers it (also what <id>.json holds, for uploads).

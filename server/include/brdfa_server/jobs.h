@@ -47,18 +47,34 @@ class JobContext {
 // The job's work: its result JSON, or an error (state "failed").
 using JobRunner = std::function<Result<nlohmann::json>(JobContext&)>;
 
+// Who submits a job, and how many open (queued or running) jobs they may have; 0: no limit.
+struct JobOwner {
+  std::string user;  // Identity::owner()
+  size_t maxOpen = 0;
+};
+
+// What submit() did: the new job's id, or why there is none.
+struct JobSubmitted {
+  std::optional<std::string> id;
+  bool quotaFull = false;  // the owner already has maxOpen open jobs
+  size_t ownerOpen = 0;    // with quotaFull: how many
+};
+
 class JobManager {
  public:
   // Job ids are idPrefix + "job-<n>" (a replica's "<tag>.", config.h).
   explicit JobManager(std::shared_ptr<Renderer> renderer, int workers = kJobWorkers, std::string idPrefix = {});
   ~JobManager();  // stop() and join the workers
 
-  // Queues a batch test; returns its id, or nullopt when kMaxJobs jobs are all unfinished.
-  std::optional<std::string> submit(std::vector<JobItem> items);
+  // Queues a batch test; no id when kMaxJobs jobs are all unfinished or the owner is at their limit.
+  JobSubmitted submit(std::vector<JobItem> items, const JobOwner& owner = {});
 
-  // Queues a one-piece job of `kind` ("convergence"); `request` is echoed by describe(). nullopt
-  // when kMaxOpenRunnerJobs such jobs are queued or running, or kMaxJobs are all unfinished.
-  std::optional<std::string> submitRunner(std::string kind, nlohmann::json request, JobRunner run);
+  // Queues a one-piece job of `kind` ("convergence"); `request` is echoed by describe(). No id
+  // when kMaxOpenRunnerJobs such jobs are queued or running, kMaxJobs are all unfinished, or the
+  // owner is at their limit.
+  JobSubmitted submitRunner(std::string kind, nlohmann::json request, JobRunner run, const JobOwner& owner = {});
+  // The owner of a job (JobOwner::user); nullopt for unknown ids.
+  std::optional<std::string> ownerOf(const std::string& id) const;
 
   // Batch tests: {"id", "kind": "validate", "state", "progress", "total", "finished",
   // "results": [...]}. One-piece jobs: {"id", "kind", "state", "progress", "request", and
@@ -79,6 +95,7 @@ class JobManager {
  private:
   struct Job {
     std::string id;
+    std::string owner;
     std::string kind = "validate";
     std::vector<JobItem> items;
     std::vector<std::optional<nlohmann::json>> results;
@@ -108,6 +125,8 @@ class JobManager {
   nlohmann::json runItem(const JobItem& item);
   // Makes room for one more job (drops the oldest finished one at kMaxJobs); false when full.
   bool makeRoomLocked();
+  // Whether `owner` may open one more job; sets `out` when not.
+  bool ownerHasRoomLocked(const JobOwner& owner, JobSubmitted& out) const;
 
   std::shared_ptr<Renderer> renderer_;
   mutable std::mutex mutex_;

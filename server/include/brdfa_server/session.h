@@ -34,18 +34,29 @@ struct StreamFrame {
   uint64_t sceneVersion = 0;  // FrameStats::sceneVersion of the image
 };
 
+// Who a session belongs to, fixed when it is made.
+struct SessionOwnership {
+  std::string user;         // identity.h's Identity::owner(); "" for `default` and in none mode
+  std::string displayName;  // theirs at creation, for the teacher's class view
+  // Reads the session's frames and stream without a token (an <img> cannot send one): 128
+  // random bits, made by SessionManager::create.
+  std::string viewKey;
+};
+
 class Session {
  public:
   using Clock = std::chrono::steady_clock;
 
   // `metrics`, when given, counts each pass's time and pixel samples; it must outlive the session.
   Session(std::string id, std::unique_ptr<RenderView> view, std::chrono::milliseconds idleTimeout,
-          ServiceMetrics* metrics = nullptr);
+          ServiceMetrics* metrics = nullptr, SessionOwnership ownership = {});
   ~Session();  // stop()
   Session(const Session&) = delete;
   Session& operator=(const Session&) = delete;
 
   const std::string& id() const { return id_; }
+  const SessionOwnership& ownership() const { return ownership_; }
+  const std::string& owner() const { return ownership_.user; }
 
   // --- Scene. Updates are serialized by a lock the caller holds across read-modify-write
   // (PATCH reads the current JSON, merges, validates, applies).
@@ -164,6 +175,7 @@ class Session {
   void endViewCall();  // ends one pending view call and wakes the render thread
 
   const std::string id_;
+  const SessionOwnership ownership_;
   const std::unique_ptr<RenderView> view_;
   const std::chrono::milliseconds idleTimeout_;
   ServiceMetrics* const metrics_;

@@ -31,10 +31,15 @@ class SessionManager {
   struct Created {
     std::shared_ptr<Session> session;  // null when full or on error
     bool full = false;                 // the session cap was reached
+    bool quotaFull = false;            // the owner has `ownerLimit` sessions, none abandoned
+    size_t ownerSessions = 0;          // with quotaFull: how many the owner has
     std::optional<Error> error;        // createView failed
   };
-  // A new session with the given id, or idPrefix + a random 16-hex-digit one when `id` is empty.
-  Created create(const std::string& id = {});
+  // A new session with the given id, or idPrefix + a random 16-hex-digit one when `id` is empty,
+  // owned as `ownership` says (its viewKey is made here). With `ownerLimit` > 0 the owner may
+  // hold that many: at the limit, their own session unused for longest is reclaimed if it has
+  // been unused for `reclaimAfter`, else quotaFull.
+  Created create(const std::string& id = {}, SessionOwnership ownership = {}, size_t ownerLimit = 0);
 
   std::shared_ptr<Session> find(const std::string& id) const;
   std::vector<std::shared_ptr<Session>> list() const;
@@ -57,9 +62,10 @@ class SessionManager {
   const std::chrono::milliseconds reclaimAfter_;
   const std::string idPrefix_;
   ServiceMetrics* const metrics_;
-  // The non-default session unused for longest, if unused for at least reclaimAfter_; removed
-  // from the map (the caller stops it outside the lock). Holds mutex_.
-  std::shared_ptr<Session> takeAbandonedLocked();
+  // The non-default session unused for longest (of `owner` only, when given), if unused for at
+  // least reclaimAfter_; removed from the map (the caller stops it outside the lock). Holds mutex_.
+  std::shared_ptr<Session> takeAbandonedLocked(const std::string* owner = nullptr);
+  size_t countOwnedLocked(const std::string& owner) const;
   mutable std::mutex mutex_;
   std::map<std::string, std::shared_ptr<Session>> sessions_;
   bool stopped_ = false;
