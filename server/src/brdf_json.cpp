@@ -37,6 +37,9 @@ nlohmann::json brdfEntryToJson(const BrdfEntry& entry, bool withSource) {
   nlohmann::json out{{"name", entry.name},
                      {"format", brdfFormatName(entry.definition->format)},
                      {"builtin", entry.builtin},
+                     // Whose it is (null: a built-in or the course's) and whether classmates read it.
+                     {"owner", entry.owner.empty() ? nlohmann::json(nullptr) : nlohmann::json(entry.owner)},
+                     {"shared", entry.shared},
                      {"params", paramsToJson(entry.definition->params)}};
   // What the file claims (its `# claims:` line), checked by the batch test; null: no line.
   const BrdfClaims& c = entry.definition->claims;

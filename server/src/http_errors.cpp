@@ -88,6 +88,13 @@ nlohmann::json diagnosticsToJson(const std::vector<Diagnostic>& ds) {
   return out;
 }
 
+void sendQuotaExceeded(httplib::Response& res, const std::string& quota, uint64_t limit, uint64_t used,
+                       const std::string& message) {
+  res.set_header(kErrorNameHeader, "quota_exceeded");
+  sendJson(res, {{"error", "quota_exceeded"}, {"quota", quota}, {"limit", limit}, {"used", used}, {"message", message}},
+           429);
+}
+
 void sendJson(httplib::Response& res, const nlohmann::json& body, int status) {
   res.status = status;
   // `replace` keeps invalid UTF-8 from user text (a .brdf file, a name) from throwing here.

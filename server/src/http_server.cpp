@@ -53,7 +53,9 @@ Result<std::unique_ptr<HttpServer>> HttpServer::create(const ServerConfig& confi
   http.set_keep_alive_timeout(2);
 
   Service& s = *out->service_;
+  registerAccessGate(http, s);
   registerSystemRoutes(http, s);
+  registerAuthRoutes(http, s);
   registerBrdfRoutes(http, s);
   registerSessionRoutes(http, s);
   registerRenderRoutes(http, s);

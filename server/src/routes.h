@@ -14,8 +14,12 @@
 
 namespace brdfa::server {
 
+// First: the pre-routing gate (cross-site refusals, the requester's identity, 401).
+void registerAccessGate(httplib::Server& server, Service& service);
+void registerAuthRoutes(httplib::Server& server, Service& service);  // /api/auth/...
 void registerSystemRoutes(httplib::Server& server, Service& service);  // health, handlers
-void registerBrdfRoutes(httplib::Server& server, Service& service);
+void registerBrdfRoutes(httplib::Server& server, Service& service);  // registers the presets' first
+void registerPresetRoutes(httplib::Server& server, Service& service);
 void registerSessionRoutes(httplib::Server& server, Service& service);
 void registerRenderRoutes(httplib::Server& server, Service& service);
 void registerAnalysisRoutes(httplib::Server& server, Service& service);  // plots of BRDFs
@@ -26,6 +30,15 @@ void registerStaticRoutes(httplib::Server& server, Service& service);  // last: 
 
 // GET /metrics' body: the Prometheus text format (metrics_exposition.cpp).
 std::string metricsText(const Service& service);
+
+// The person the request acts for, as the gate identified it; for a request without one (a
+// view-key read) a nobody who owns nothing.
+const Identity& requester(const httplib::Request& req);
+bool requesterKnown(const httplib::Request& req);
+// Whether the request's ?key= is the session's view key (compared in constant time).
+bool hasViewKey(const httplib::Request& req, const Session& session);
+// True for the teacher; else answers 403 forbidden.
+bool requireTeacher(const httplib::Request& req, httplib::Response& res);
 
 // True, having answered 503 `draining`, when the server drains (SIGTERM): it takes no new
 // sessions or jobs, and the balancer sends them to another replica.
@@ -40,10 +53,17 @@ std::optional<nlohmann::json> readJsonBody(const httplib::Request& req, httplib:
 std::optional<std::string> readBrdfTextBody(const httplib::Request& req, httplib::Response& res,
                                             const httplib::ContentReader& reader);
 
+// What a route does with the session it names: reads it (its owner, the teacher, everyone for
+// `default`, a view-key holder for frames), changes its scene (its owner; the teacher for
+// `default`), or deletes it (its owner or the teacher).
+// Its owner, the teacher, and for `default` everyone.
+bool canReadSession(const Identity& who, const Session& session);
+enum class SessionAccess { Read, ReadWithKey, Write, Delete };
 // The session named by the path's first match (running a pending default scene first), or
-// answers 404 and returns null.
+// answers and returns null: 404 when the requester may not read it (as for no such session),
+// 403 when they may read but not change it.
 std::shared_ptr<Session> sessionOr404(Service& service, const httplib::Request& req, httplib::Response& res,
-                                      bool initialize = true);
+                                      SessionAccess access, bool initialize = true);
 // True when the session has a scene; else answers 409 no_scene.
 bool requireScene(Session& session, httplib::Response& res);
 
@@ -59,7 +79,19 @@ struct RenderSlotGuard {
     if (slots) slots->release();
   }
 };
-bool takeRenderSlot(Service& service, httplib::Response& res, RenderSlotGuard& guard);
+// Also counts the render against the requester's --quota-renders (429 past it).
+struct RenderQuotaGuard {
+  OwnerCounter* counter = nullptr;
+  std::string owner;
+  RenderQuotaGuard() = default;
+  RenderQuotaGuard(const RenderQuotaGuard&) = delete;
+  RenderQuotaGuard& operator=(const RenderQuotaGuard&) = delete;
+  ~RenderQuotaGuard() {
+    if (counter) counter->release(owner);
+  }
+};
+bool takeRenderSlot(Service& service, const httplib::Request& req, httplib::Response& res, RenderSlotGuard& guard,
+                    RenderQuotaGuard& quota);
 
 // Headers every image response carries.
 void setFrameHeaders(httplib::Response& res, const FrameStats& stats);

@@ -41,7 +41,7 @@ Result<double> readNumber(const json& body, const char* key, double fallback) {
   return it->get<double>();
 }
 
-Result<std::vector<Series>> readSeries(const json& body, const Service& service) {
+Result<std::vector<Series>> readSeries(const json& body, Service& service, const Identity& who) {
   auto it = body.find("series");
   if (it == body.end() || !it->is_array() || it->empty() || it->size() > kMaxSeries)
     return bad("series", "must be an array of 1.." + std::to_string(kMaxSeries) +
@@ -68,8 +68,9 @@ Result<std::vector<Series>> readSeries(const json& body, const Service& service)
       auto name = s.find("brdf");
       if (name == s.end() || !name->is_string()) return bad(at + ".brdf", "must name a BRDF (or give \"source\")");
       series.brdfName = name->get<std::string>();
-      auto entry = service.library.find(series.brdfName);
-      if (!entry)
+      auto entry = service.brdfs.find(series.brdfName);
+      // Someone else's BRDF is as unknown as one that does not exist.
+      if (!entry || !canReadBrdf(who, *entry))
         return makeError(ErrorCode::NotFound, at + ".brdf: unknown BRDF '" + series.brdfName + "'", at + ".brdf");
       series.brdf = entry->definition;
     }
@@ -260,12 +261,13 @@ void registerAnalysisRoutes(httplib::Server& server, Service& service) {
     Result<PlotRequest> request = readRequest(kind, body);
     if (!request) return sendError(res, request.error());
     if (Result<void> valid = checkPlotRequest(request.value()); !valid) return sendError(res, valid.error());
-    Result<std::vector<Series>> series = readSeries(body, service);
+    Result<std::vector<Series>> series = readSeries(body, service, requester(req));
     if (!series) return sendError(res, series.error());
 
     // The device is shared with every session: analyses queue with the one-shot renders.
+    RenderQuotaGuard quota;
     RenderSlotGuard slot;
-    if (!takeRenderSlot(service, res, slot)) return;
+    if (!takeRenderSlot(service, req, res, slot, quota)) return;
 
     const auto t0 = std::chrono::steady_clock::now();
     std::vector<Plot> plots;

@@ -1,5 +1,5 @@
 // Assets (issue 4): POST /api/assets (multipart upload), GET /api/assets[?kind=],
-// GET /api/assets/{id}. Validation and storage live in AssetStore; this file reads the
+// GET /api/assets/{id}, DELETE /api/assets/{id}. Validation and storage live in AssetStore; this file reads the
 // multipart body without holding more than one file's worth of it.
 #include <algorithm>
 
@@ -59,6 +59,9 @@ void sendRejection(httplib::Response& res, const Error& error, AssetRejection re
 void badUpload(httplib::Response& res, const std::string& message, const std::string& field = "file") {
   sendError(res, 400, "invalid_argument", message, field);
 }
+
+// Built-ins, Blender worlds and the course's uploads are everyone's; an upload, its uploader's.
+bool assetReadable(const Identity& who, const AssetRecord& r) { return canRead(who, r.owner, r.owner.empty()); }
 
 }  // namespace
 
@@ -131,8 +134,16 @@ void registerAssetRoutes(httplib::Server& server, Service& service) {
     upload.kind = kind ? kind->content : "";
     upload.fileName = file->fileName;
     upload.contentType = file->contentType;
+    const Identity& who = requester(req);
+    const AssetOwner owner{who.libraryOwner(), size_t(service.quotaFor(who, &Quotas::uploads)),
+                           service.quotaFor(who, &Quotas::uploadBytes)};
     AssetRejection rejection = AssetRejection::None;
-    Result<AssetRecord> added = service.assets->add(upload, rejection);
+    AssetQuotaHit hit;
+    Result<AssetRecord> added = service.assets->add(upload, rejection, owner, &hit);
+    if (rejection == AssetRejection::QuotaExceeded)
+      return sendQuotaExceeded(res, hit.quota, hit.limit, hit.used,
+                               added.error().message + " (--quota-" + (hit.quota == "uploads" ? "uploads " : "upload-bytes ") +
+                                   std::to_string(hit.limit) + "); delete one of yours (DELETE /api/assets/{id})");
     if (!added) return sendRejection(res, added.error(), rejection);
     res.set_header("Location", "/api/assets/" + added->id);
     sendJson(res, assetToJson(added.value()), 201);
@@ -146,8 +157,10 @@ void registerAssetRoutes(httplib::Server& server, Service& service) {
         return sendError(res, 400, "invalid_argument", "kind must be mesh, texture or environment", "kind");
       kind = k;
     }
+    const Identity& who = requester(req);
     nlohmann::json out = nlohmann::json::array();
-    for (const AssetRecord& r : service.assets->list(kind)) out.push_back(assetToJson(r));
+    for (const AssetRecord& r : service.assets->list(kind))
+      if (assetReadable(who, r)) out.push_back(assetToJson(r));
     sendJson(res, out);
   });
 
@@ -155,9 +168,26 @@ void registerAssetRoutes(httplib::Server& server, Service& service) {
   server.Get("/api/assets/(.+)", [&service](const httplib::Request& req, httplib::Response& res) {
     const std::string id = req.matches[1];
     std::optional<AssetRecord> found = service.assets->find(id);
-    if (!found)
+    if (!found || !assetReadable(requester(req), *found))
       return sendError(res, 404, "not_found", "no asset '" + id.substr(0, 128) + "'", "id");
     sendJson(res, assetToJson(*found));
+  });
+
+  // Removes an upload (its owner, or the teacher); scenes showing it keep it until they change.
+  server.Delete("/api/assets/(.+)", [&service](const httplib::Request& req, httplib::Response& res) {
+    const std::string id = req.matches[1];
+    const Identity& who = requester(req);
+    std::optional<AssetRecord> found = service.assets->find(id);
+    if (!found || !assetReadable(who, *found))
+      return sendError(res, 404, "not_found", "no asset '" + id.substr(0, 128) + "'", "id");
+    if (found->source != "upload")
+      return sendError(res, 409, "conflict", "asset '" + id + "' is built in and cannot be deleted", "id");
+    if (!canDelete(who, found->owner))
+      return sendError(res, 403, "forbidden", "only its uploader or the teacher deletes asset '" + id + "'", "id");
+    Result<bool> removed = service.assets->remove(id);
+    if (!removed) return sendError(res, 500, "storage_error", removed.error().message);
+    if (!removed.value()) return sendError(res, 404, "not_found", "no asset '" + id.substr(0, 128) + "'", "id");
+    res.status = 204;
   });
 }
 

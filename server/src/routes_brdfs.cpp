@@ -1,13 +1,11 @@
-// The BRDF library over REST: list, read, compile-and-save, delete, validate, presets.
+// The BRDF library over REST: list, read, compile-and-save, share, delete, validate (presets:
+// routes_presets.cpp).
 #include <algorithm>
-#include <filesystem>
-#include <fstream>
-#include <sstream>
 
-#include "brdfa_server/atomic_file.h"
 #include "brdfa_server/brdf_json.h"
 #include "brdfa_server/http_errors.h"
 #include "brdfa_server/request_body.h"
+#include "brdf_access.h"
 #include "routes.h"
 
 namespace brdfa::server {
@@ -45,35 +43,19 @@ nlohmann::json brokenToJson(const BrokenBrdf& b, bool withSource) {
   return out;
 }
 
-const char* const kNameRule = "names are 1-64 characters of [A-Za-z0-9_-] and not 'inline' or 'validate'";
-
-// The BRDF a preset route names; answers 400/404 and returns null when there is none.
-std::shared_ptr<const BrdfEntry> presetBrdf(Service& service, const std::string& name, httplib::Response& res) {
-  if (!isValidBrdfName(name)) {
-    sendError(res, 400, "invalid_argument", std::string("BRDF ") + kNameRule, "name");
-    return nullptr;
-  }
-  auto entry = service.library.find(name);
-  if (!entry) sendError(res, 404, "not_found", "no BRDF named '" + name + "'", "name");
-  return entry;
-}
-
-bool readTextFile(const std::filesystem::path& path, std::string& out) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) return false;
-  std::ostringstream text;
-  text << in.rdbuf();
-  out = text.str();
-  return !in.bad();
-}
-
 }  // namespace
 
 void registerBrdfRoutes(httplib::Server& server, Service& service) {
-  server.Get("/api/brdfs", [&service](const httplib::Request&, httplib::Response& res) {
+  // Before /api/brdfs/{name}: "<name>/presets" must never be taken as a qualified name.
+  registerPresetRoutes(server, service);
+
+  server.Get("/api/brdfs", [&service](const httplib::Request& req, httplib::Response& res) {
+    const Identity& who = requester(req);
     nlohmann::json list = nlohmann::json::array();
-    for (const auto& entry : service.library.list()) list.push_back(brdfEntryToJson(*entry, false));
-    for (const BrokenBrdf& b : service.library.listBroken()) list.push_back(brokenToJson(b, false));
+    for (const auto& entry : service.brdfs.list())
+      if (canReadBrdf(who, *entry)) list.push_back(brdfEntryToJson(*entry, false));
+    for (const BrokenBrdf& b : service.brdfs.listBroken())
+      if (canReadBrdf(who, b)) list.push_back(brokenToJson(b, false));
     std::stable_sort(list.begin(), list.end(), [](const nlohmann::json& a, const nlohmann::json& b) {
       return a["name"].get<std::string>() < b["name"].get<std::string>();
     });
@@ -94,30 +76,42 @@ void registerBrdfRoutes(httplib::Server& server, Service& service) {
     sendJson(res, body);
   });
 
-  server.Get("/api/brdfs/([^/]+)", [&service](const httplib::Request& req, httplib::Response& res) {
+  const std::string byName = std::string("/api/brdfs/") + kBrdfPathName;
+  server.Get(byName, [&service](const httplib::Request& req, httplib::Response& res) {
+    const Identity& who = requester(req);
     std::string name = req.matches[1];
-    auto entry = service.library.find(name);
-    if (entry) return sendJson(res, brdfEntryToJson(*entry, true));
-    if (auto broken = service.library.findBroken(name)) return sendJson(res, brokenToJson(*broken, true));
+    if (!isValidQualifiedBrdfName(name))
+      return sendError(res, 400, "invalid_argument", std::string("BRDF ") + kBrdfNameRule, "name");
+    if (auto entry = service.brdfs.find(name); entry && canReadBrdf(who, *entry))
+      return sendJson(res, brdfEntryToJson(*entry, true));
+    if (auto broken = service.brdfs.findBroken(name); broken && canReadBrdf(who, *broken))
+      return sendJson(res, brokenToJson(*broken, true));
     sendError(res, 404, "not_found", "no BRDF named '" + name + "'", "name");
   });
 
-  server.Put("/api/brdfs/([^/]+)", [&service](const httplib::Request& req, httplib::Response& res,
-                                               const httplib::ContentReader& reader) {
+  server.Put(byName, [&service](const httplib::Request& req, httplib::Response& res,
+                                const httplib::ContentReader& reader) {
+    const Identity& who = requester(req);
     std::string name = req.matches[1];
-    if (!isValidBrdfName(name))
-      return sendError(res, 400, "invalid_argument",
-                       "BRDF names are 1-64 characters of [A-Za-z0-9_-] and not 'inline' or 'validate'", "name");
+    if (!mayWriteBrdfName(service, who, name, res)) return;
     // Checked before compiling to fail fast; putUser checks again atomically.
-    if (auto existing = service.library.find(name); existing && existing->builtin)
+    if (auto existing = service.brdfs.find(name); existing && existing->builtin)
       return sendError(res, 409, "conflict", "BRDF '" + name + "' is built in and read-only", "name");
     auto text = readBrdfTextBody(req, res, reader);
     if (!text) return;
     Result<Compiled> compiled = parseAndCompile(service, *text);
     if (!compiled) return sendError(res, compiled.error());
+    BrdfLibrary* library = service.brdfs.libraryFor(name, /*create=*/true);
+    if (!library) return sendError(res, 500, "storage_error", "cannot open the library of '" + name + "'");
     Error storeError;
     std::shared_ptr<const BrdfEntry> entry;  // what this PUT stored, even if a DELETE follows at once
-    auto outcome = service.library.putUser(name, *text, compiled->definition, &storeError, &entry);
+    const int quota = service.quotaFor(who, &Quotas::brdfs);
+    auto outcome = library->putUser(name, *text, compiled->definition, &storeError, &entry, size_t(quota));
+    if (outcome == BrdfLibrary::PutOutcome::QuotaExceeded)
+      return sendQuotaExceeded(res, "brdfs", uint64_t(quota), library->userEntryCount(),
+                               "you have " + std::to_string(library->userEntryCount()) +
+                                   " saved BRDFs, the most one person may (--quota-brdfs " + std::to_string(quota) +
+                                   "); delete one (DELETE /api/brdfs/" + who.brdfNamespace() + "<name>)");
     if (outcome == BrdfLibrary::PutOutcome::StoreFailed)
       return sendError(res, 500, "storage_error", "cannot save BRDF '" + name + "': " + storeError.message);
     if (outcome == BrdfLibrary::PutOutcome::BuiltinConflict)
@@ -127,12 +121,41 @@ void registerBrdfRoutes(httplib::Server& server, Service& service) {
     sendJson(res, body, outcome == BrdfLibrary::PutOutcome::Created ? 201 : 200);
   });
 
-  server.Delete("/api/brdfs/([^/]+)", [&service](const httplib::Request& req, httplib::Response& res) {
+  // {"shared": true|false}: whether classmates may read a student's BRDF.
+  server.Patch(byName, [&service](const httplib::Request& req, httplib::Response& res) {
+    const Identity& who = requester(req);
     std::string name = req.matches[1];
-    if (!isValidBrdfName(name)) return sendError(res, 400, "invalid_argument", std::string("BRDF ") + kNameRule, "name");
+    if (!mayWriteBrdfName(service, who, name, res)) return;
+    auto body = readJsonBody(req, res);
+    if (!body) return;
+    auto shared = body->is_object() ? body->find("shared") : body->end();
+    if (!body->is_object() || body->size() != 1 || shared == body->end() || !shared->is_boolean())
+      return sendError(res, 400, "invalid_argument", "send {\"shared\": true} or {\"shared\": false}", "shared");
+    if (brdfNameOwner(name).empty())
+      return sendError(res, 400, "invalid_argument", "course BRDFs are read by everyone already", "name");
+    Result<bool> changed = service.brdfs.libraryFor(name)->setShared(name, shared->get<bool>());
+    if (!changed) return sendError(res, 500, "storage_error", changed.error().message);
+    if (!changed.value()) return sendError(res, 404, "not_found", "no BRDF named '" + name + "'", "name");
+    if (auto entry = service.brdfs.find(name)) return sendJson(res, brdfEntryToJson(*entry, false));
+    sendJson(res, {{"name", name}, {"shared", shared->get<bool>()}});  // a broken one
+  });
+
+  server.Delete(byName, [&service](const httplib::Request& req, httplib::Response& res) {
+    const Identity& who = requester(req);
+    std::string name = req.matches[1];
+    if (!isValidQualifiedBrdfName(name))
+      return sendError(res, 400, "invalid_argument", std::string("BRDF ") + kBrdfNameRule, "name");
+    auto entry = service.brdfs.find(name);
+    auto broken = entry ? std::nullopt : service.brdfs.findBroken(name);
+    const bool visible = (entry && canReadBrdf(who, *entry)) || (broken && canReadBrdf(who, *broken));
+    if (!visible) return sendError(res, 404, "not_found", "no BRDF named '" + name + "'", "name");
+    if (entry && entry->builtin)
+      return sendError(res, 409, "conflict", "BRDF '" + name + "' is built in and cannot be deleted", "name");
+    if (!canDelete(who, std::string(brdfNameOwner(name))))
+      return sendError(res, 403, "forbidden", "only its owner or the teacher deletes BRDF '" + name + "'", "name");
     Error storeError;
-    switch (service.library.remove(name, &storeError)) {
-      case BrdfLibrary::RemoveOutcome::Removed:  // its presets with it (BrdfLibrary::remove)
+    switch (service.brdfs.libraryFor(name)->remove(name, &storeError)) {
+      case BrdfLibrary::RemoveOutcome::Removed:  // every person's presets of it too (BrdfCatalog)
         res.status = 204;
         return;
       case BrdfLibrary::RemoveOutcome::StoreFailed:
@@ -142,93 +165,6 @@ void registerBrdfRoutes(httplib::Server& server, Service& service) {
       case BrdfLibrary::RemoveOutcome::Builtin:
         return sendError(res, 409, "conflict", "BRDF '" + name + "' is built in and cannot be deleted", "name");
     }
-  });
-
-  // Presets: named parameter sets of one BRDF, <data dir>/presets/<brdf>/<preset>.json.
-  server.Get("/api/brdfs/([^/]+)/presets", [&service](const httplib::Request& req, httplib::Response& res) {
-    std::string name = req.matches[1];
-    if (!presetBrdf(service, name, res)) return;
-    std::vector<std::string> names;
-    std::error_code ec;
-    for (std::filesystem::directory_iterator it(service.library.presetDir(name), ec), end; !ec && it != end; it.increment(ec)) {
-      const std::filesystem::path& path = it->path();
-      std::string stem = path.stem().string();
-      if (path.extension() == ".json" && isValidBrdfName(stem)) names.push_back(stem);
-    }
-    std::sort(names.begin(), names.end());
-    sendJson(res, names);
-  });
-
-  server.Get("/api/brdfs/([^/]+)/presets/([^/]+)", [&service](const httplib::Request& req, httplib::Response& res) {
-    std::string name = req.matches[1], preset = req.matches[2];
-    if (!presetBrdf(service, name, res)) return;
-    if (!isValidBrdfName(preset))
-      return sendError(res, 400, "invalid_argument", std::string("preset ") + kNameRule, "preset");
-    std::string text;
-    if (!readTextFile(std::filesystem::path(service.library.presetDir(name)) / (preset + ".json"), text))
-      return sendError(res, 404, "not_found", "BRDF '" + name + "' has no preset '" + preset + "'", "preset");
-    nlohmann::json values = nlohmann::json::parse(text, nullptr, /*allow_exceptions=*/false);
-    if (!values.is_object())
-      return sendError(res, 500, "storage_error", "preset file of '" + name + "/" + preset + "' is not a JSON object");
-    sendJson(res, values);
-  });
-
-  server.Put("/api/brdfs/([^/]+)/presets/([^/]+)", [&service](const httplib::Request& req, httplib::Response& res) {
-    std::string name = req.matches[1], preset = req.matches[2];
-    if (!presetBrdf(service, name, res)) return;
-    if (!isValidBrdfName(preset))
-      return sendError(res, 400, "invalid_argument", std::string("preset ") + kNameRule, "preset");
-    auto body = readJsonBody(req, res);
-    if (!body) return;
-    if (!body->is_object())
-      return sendError(res, 400, "invalid_argument", "a preset is a JSON object of parameter values");
-    // Checked and written against the BRDF the name holds now, with no BRDF store or removal in
-    // between (BrdfLibrary::withEntry).
-    service.library.withEntry(name, [&](std::shared_ptr<const BrdfEntry> entry) {
-      if (!entry) return sendError(res, 404, "not_found", "no BRDF named '" + name + "'", "name");
-      // Same rules as a scene object's "params"; stored normalized (bools as true/false).
-      nlohmann::json values = nlohmann::json::object();
-      for (auto it = body->begin(); it != body->end(); ++it) {
-        std::string field = "params." + it.key();
-        const BrdfParam* p = entry->definition->findParam(it.key());
-        if (!p) {
-          std::string known;
-          for (const BrdfParam& q : entry->definition->params) known += (known.empty() ? "" : ", ") + q.name;
-          return sendError(res, 400, "invalid_argument",
-                           field + ": BRDF '" + name + "' has no parameter '" + it.key() + "' (known: " + known + ")",
-                           field);
-        }
-        Result<Vec3> value = paramValueFromJson(*p, it.value(), field);
-        if (!value) return sendError(res, value.error());
-        values[p->name] = paramValueToJson(p->type, value.value());
-      }
-      std::filesystem::path target = std::filesystem::path(service.library.presetDir(name)) / (preset + ".json");
-      std::error_code ec;
-      bool existed = std::filesystem::exists(target, ec);
-      Result<void> written = writeFileAtomically(target, values.dump(2) + "\n");
-      if (!written)
-        return sendError(res, 500, "storage_error", "cannot save preset '" + preset + "': " + written.error().message);
-      sendJson(res, values, existed ? 200 : 201);
-    });
-  });
-
-  server.Delete("/api/brdfs/([^/]+)/presets/([^/]+)", [&service](const httplib::Request& req, httplib::Response& res) {
-    std::string name = req.matches[1], preset = req.matches[2];
-    if (!presetBrdf(service, name, res)) return;
-    if (!isValidBrdfName(preset))
-      return sendError(res, 400, "invalid_argument", std::string("preset ") + kNameRule, "preset");
-    service.library.withEntry(name, [&](std::shared_ptr<const BrdfEntry> entry) {
-      if (!entry) return sendError(res, 404, "not_found", "no BRDF named '" + name + "'", "name");
-      Result<void> removed =
-          removeFileDurably(std::filesystem::path(service.library.presetDir(name)) / (preset + ".json"));
-      if (removed) {
-        res.status = 204;
-        return;
-      }
-      if (removed.error().code == ErrorCode::NotFound)
-        return sendError(res, 404, "not_found", "BRDF '" + name + "' has no preset '" + preset + "'", "preset");
-      sendError(res, 500, "storage_error", removed.error().message);
-    });
   });
 }
 

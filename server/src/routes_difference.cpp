@@ -53,9 +53,10 @@ void registerDifferenceRoutes(httplib::Server& server, Service& service) {
       if (text.empty() || *end != '\0' || !(range > 0) || !std::isfinite(range))
         return sendError(res, 400, "invalid_argument", "range must be a positive number", "range");
     }
-    auto a = sessionOr404(service, req, res);
+    auto a = sessionOr404(service, req, res, SessionAccess::Read);
     if (!a) return;
     auto b = service.sessions->find(req.get_param_value("against"));
+    if (b && !canReadSession(requester(req), *b)) b = nullptr;  // someone else's: as if there were none
     if (!b) return sendError(res, 404, "not_found", "no session '" + req.get_param_value("against") + "'", "against");
     b->ensureInitialized();
     a->touch();

@@ -97,7 +97,21 @@ void sendFrame(httplib::Response& res, const std::vector<uint8_t>& bytes, FrameF
   res.set_content(reinterpret_cast<const char*>(bytes.data()), bytes.size(), infoOf(format).contentType);
 }
 
-bool takeRenderSlot(Service& service, httplib::Response& res, RenderSlotGuard& guard) {
+bool takeRenderSlot(Service& service, const httplib::Request& req, httplib::Response& res, RenderSlotGuard& guard,
+                    RenderQuotaGuard& quota) {
+  // The person's own quota first: a student's script that fires renders in parallel waits in no
+  // queue and holds no slot that classmates could use.
+  const Identity& who = requester(req);
+  const int limit = service.quotaFor(who, &Quotas::renders);
+  int held = 0;
+  if (!service.rendersInFlight.take(who.owner(), limit, held)) {
+    sendQuotaExceeded(res, "renders", uint64_t(limit), uint64_t(held),
+                      "you have " + std::to_string(held) + " one-shot render(s) or analyses in flight, the most one "
+                      "person may (--quota-renders " + std::to_string(limit) + "); wait for it to finish");
+    return false;
+  }
+  quota.counter = &service.rendersInFlight;
+  quota.owner = who.owner();
   if (!service.renderSlots.acquire(kRenderSlotWait)) {
     sendError(res, 503, "busy", service.stopping ? "server is shutting down" : "too many renders in progress; retry later");
     return false;
@@ -161,15 +175,16 @@ void registerRenderRoutes(httplib::Server& server, Service& service) {
 
     bool spfGiven = sceneJson.contains("render") && sceneJson["render"].is_object() &&
                     sceneJson["render"].contains("samples_per_frame");
-    Result<Scene> sceneResult = sceneFromJson(sceneJson, service.resolver(inlineBrdf));
+    Result<Scene> sceneResult = sceneFromJson(sceneJson, service.resolver(requester(req), inlineBrdf));
     if (!sceneResult) return sendError(res, sceneResult.error());
     Scene scene = std::move(sceneResult.value());
     scene.render.maxSamples = spp;
     if (!spfGiven) scene.render.samplesPerFrame = std::min(spp, kOneShotSamplesPerPass);
 
     // Bounded concurrency: renders share one device; a queue longer than the wait is refused.
+    RenderQuotaGuard quota;
     RenderSlotGuard slot;
-    if (!takeRenderSlot(service, res, slot)) return;
+    if (!takeRenderSlot(service, req, res, slot, quota)) return;
 
     Result<std::unique_ptr<RenderView>> view = service.renderer->createView();
     if (!view) return sendError(res, view.error());

@@ -53,10 +53,10 @@ nlohmann::json statsToJson(const FrameStats& s, const std::optional<Error>& rend
 }
 
 // Validates `json` and applies it under the held update lock; answers with the full scene.
-void applySceneJson(Service& service, Session& session, std::unique_lock<std::mutex>& lock, const nlohmann::json& json,
-                    httplib::Response& res) {
+void applySceneJson(Service& service, const Identity& who, Session& session, std::unique_lock<std::mutex>& lock,
+                    const nlohmann::json& json, httplib::Response& res) {
   std::vector<std::string> notes;
-  Result<Scene> scene = sceneFromJson(json, service.resolver(), &notes);
+  Result<Scene> scene = sceneFromJson(json, service.resolver(who), &notes);
   if (!scene) return sendError(res, scene.error());
   nlohmann::json full = sceneToJson(scene.value(), notes);
   Result<void> applied = session.applyScene(lock, scene.value(), full);
@@ -174,21 +174,43 @@ bool writeNextPart(Service& service, Session& session, StreamState& state, httpl
   return true;
 }
 
-nlohmann::json sessionSummary(Session& s) {
-  return {{"id", s.id()},
-          {"stats", statsToJson(s.stats(), s.renderError(), s.renderSettings())},
-          {"stream_clients", s.streamClients()}};
+// What a reader of the session sees of it: the teacher also whose it is.
+nlohmann::json sessionSummary(Session& s, const Identity& who) {
+  nlohmann::json out{{"id", s.id()},
+                     {"stats", statsToJson(s.stats(), s.renderError(), s.renderSettings())},
+                     {"stream_clients", s.streamClients()},
+                     {"view_key", s.ownership().viewKey}};
+  if (who.teacher()) {
+    out["owner"] = s.owner().empty() ? nlohmann::json(nullptr) : nlohmann::json(s.owner());
+    out["owner_display_name"] = s.ownership().displayName;
+  }
+  return out;
 }
 
 }  // namespace
 
-// Finds the session named in the path (running a pending default scene first), or answers 404.
+bool canReadSession(const Identity& who, const Session& s) {
+  return canRead(who, s.owner(), s.id() == kDefaultSessionId);
+}
+
 std::shared_ptr<Session> sessionOr404(Service& service, const httplib::Request& req, httplib::Response& res,
-                                      bool initialize) {
+                                      SessionAccess access, bool initialize) {
   std::string id = req.matches[1];
   auto session = service.sessions->find(id);
-  if (!session) {
+  const Identity& who = requester(req);
+  // Someone else's session answers exactly as one that does not exist.
+  const bool mayRead =
+      session && (canReadSession(who, *session) || (access == SessionAccess::ReadWithKey && hasViewKey(req, *session)));
+  if (!mayRead) {
     sendError(res, 404, "not_found", "no session '" + id + "'", "session");
+    return nullptr;
+  }
+  if (access == SessionAccess::Write && !canWrite(who, session->owner())) {
+    sendError(res, 403, "forbidden",
+              session->id() == kDefaultSessionId ? "only the teacher changes the default session; make your own "
+                                                   "(POST /api/sessions)"
+                                                 : "only its owner changes session '" + id + "'",
+              "session");
     return nullptr;
   }
   if (initialize) session->ensureInitialized();
@@ -203,9 +225,11 @@ bool requireScene(Session& session, httplib::Response& res) {
 
 
 void registerSessionRoutes(httplib::Server& server, Service& service) {
-  server.Get("/api/sessions", [&service](const httplib::Request&, httplib::Response& res) {
+  server.Get("/api/sessions", [&service](const httplib::Request& req, httplib::Response& res) {
+    const Identity& who = requester(req);
     nlohmann::json list = nlohmann::json::array();
-    for (auto& s : service.sessions->list()) list.push_back(sessionSummary(*s));
+    for (auto& s : service.sessions->list())
+      if (canReadSession(who, *s)) list.push_back(sessionSummary(*s, who));
     sendJson(res, list);
   });
 
@@ -218,10 +242,18 @@ void registerSessionRoutes(httplib::Server& server, Service& service) {
       body = std::move(*parsed);
     }
     // Validated before the session exists, so a bad scene leaves nothing behind.
+    const Identity& who = requester(req);
     std::vector<std::string> notes;
-    Result<Scene> scene = sceneFromJson(body, service.resolver(), &notes);
+    Result<Scene> scene = sceneFromJson(body, service.resolver(who), &notes);
     if (!scene) return sendError(res, scene.error());
-    SessionManager::Created created = service.sessions->create();
+    const int quota = service.quotaFor(who, &Quotas::sessions);
+    SessionManager::Created created =
+        service.sessions->create({}, SessionOwnership{who.owner(), who.displayName, {}}, size_t(quota));
+    if (created.quotaFull)
+      return sendQuotaExceeded(
+          res, "sessions", uint64_t(quota), created.ownerSessions,
+          "you have " + std::to_string(created.ownerSessions) + " sessions, the most one person may have (--quota-sessions " +
+              std::to_string(quota) + "); delete one (DELETE /api/sessions/{id}) or close a tab");
     if (created.full)
       return sendError(res, 429, "too_many_sessions",
                        "at most " + std::to_string(service.sessions->maxSessions()) + " sessions; delete one first");
@@ -237,19 +269,26 @@ void registerSessionRoutes(httplib::Server& server, Service& service) {
       }
     }
     res.set_header("Location", "/api/sessions/" + created.session->id());
-    sendJson(res, {{"id", created.session->id()}, {"scene", full}}, 201);
+    sendJson(res, {{"id", created.session->id()}, {"view_key", created.session->ownership().viewKey}, {"scene", full}},
+             201);
   });
 
   server.Get("/api/sessions/([^/]+)", [&service](const httplib::Request& req, httplib::Response& res) {
-    auto session = sessionOr404(service, req, res);
+    auto session = sessionOr404(service, req, res, SessionAccess::Read);
     if (!session) return;
-    nlohmann::json body = sessionSummary(*session);
+    nlohmann::json body = sessionSummary(*session, requester(req));
     body["scene"] = session->sceneJson();
     sendJson(res, body);
   });
 
   server.Delete("/api/sessions/([^/]+)", [&service](const httplib::Request& req, httplib::Response& res) {
     std::string id = req.matches[1];
+    if (auto session = service.sessions->find(id); session && id != kDefaultSessionId) {
+      const Identity& who = requester(req);
+      if (!canReadSession(who, *session)) return sendError(res, 404, "not_found", "no session '" + id + "'", "session");
+      if (!canDelete(who, session->owner()))
+        return sendError(res, 403, "forbidden", "only its owner or the teacher deletes session '" + id + "'", "session");
+    }
     switch (service.sessions->remove(id)) {
       case SessionManager::RemoveOutcome::Removed:
         res.status = 204;
@@ -262,24 +301,24 @@ void registerSessionRoutes(httplib::Server& server, Service& service) {
   });
 
   server.Get("/api/sessions/([^/]+)/scene", [&service](const httplib::Request& req, httplib::Response& res) {
-    auto session = sessionOr404(service, req, res);
+    auto session = sessionOr404(service, req, res, SessionAccess::Read);
     if (!session || !requireScene(*session, res)) return;
     sendJson(res, session->sceneJson());
   });
 
   server.Put("/api/sessions/([^/]+)/scene", [&service](const httplib::Request& req, httplib::Response& res) {
-    auto session = sessionOr404(service, req, res, /*initialize=*/false);
+    auto session = sessionOr404(service, req, res, SessionAccess::Write, /*initialize=*/false);
     if (!session) return;
     auto body = readJsonBody(req, res);
     if (!body) return;
     auto lock = session->beginSceneUpdate(false);  // replaced anyway: no need for the default
-    applySceneJson(service, *session, lock, *body, res);
+    applySceneJson(service, requester(req), *session, lock, *body, res);
   });
 
   // RFC 7386 JSON merge patch onto the current (full) scene JSON, then validated as a whole.
   // Arrays are replaced, not merged: to change one object, send the whole "objects" array.
   server.Patch("/api/sessions/([^/]+)/scene", [&service](const httplib::Request& req, httplib::Response& res) {
-    auto session = sessionOr404(service, req, res, /*initialize=*/false);
+    auto session = sessionOr404(service, req, res, SessionAccess::Write, /*initialize=*/false);
     if (!session) return;
     auto patch = readJsonBody(req, res);
     if (!patch) return;
@@ -287,11 +326,11 @@ void registerSessionRoutes(httplib::Server& server, Service& service) {
     nlohmann::json merged = session->sceneJson();
     if (merged.is_null()) merged = nlohmann::json::object();
     merged.merge_patch(*patch);
-    applySceneJson(service, *session, lock, merged, res);
+    applySceneJson(service, requester(req), *session, lock, merged, res);
   });
 
   server.Get("/api/sessions/([^/]+)/stats", [&service](const httplib::Request& req, httplib::Response& res) {
-    auto session = sessionOr404(service, req, res);
+    auto session = sessionOr404(service, req, res, SessionAccess::Read);
     if (!session) return;
     session->touch();  // a client polling stats is watching
     sendJson(res, statsToJson(session->stats(), session->renderError(), session->renderSettings()));
@@ -318,7 +357,7 @@ void registerSessionRoutes(httplib::Server& server, Service& service) {
                          "max_points");
       maxPoints = static_cast<size_t>(*parsed);
     }
-    auto session = sessionOr404(service, req, res);
+    auto session = sessionOr404(service, req, res, SessionAccess::Read);
     if (!session) return;
     session->touch();  // a client following the curve is watching
     if (!requireScene(*session, res)) return;
@@ -344,7 +383,7 @@ void registerSessionRoutes(httplib::Server& server, Service& service) {
       if (!parsed) return sendError(res, 400, "invalid_argument", "min_spp must be a non-negative integer", "min_spp");
       minSpp = *parsed;
     }
-    auto session = sessionOr404(service, req, res);
+    auto session = sessionOr404(service, req, res, SessionAccess::ReadWithKey);
     if (!session) return;
     session->touch();
     if (!requireScene(*session, res)) return;
@@ -384,7 +423,7 @@ void registerSessionRoutes(httplib::Server& server, Service& service) {
   // frames/s (and always the converged one); each client sends the latest when it is newer
   // than what it sent last, so a slow client skips frames and never holds up rendering.
   server.Get("/api/sessions/([^/]+)/stream", [&service](const httplib::Request& req, httplib::Response& res) {
-    auto session = sessionOr404(service, req, res);
+    auto session = sessionOr404(service, req, res, SessionAccess::ReadWithKey);
     if (!session) return;
     if (service.activeStreams.fetch_add(1) >= service.maxStreams) {
       service.activeStreams.fetch_sub(1);

@@ -297,7 +297,7 @@ Result<SceneObject> parseObject(const json& j, const std::string& prefix, const 
                      "\"inline\" is only valid in a one-shot POST /api/render that carries brdf_source");
     obj.brdf = r.inlineBrdf;
   } else {
-    auto entry = r.library ? r.library->find(brdfName) : nullptr;
+    auto entry = r.findBrdf ? r.findBrdf(brdfName) : nullptr;
     if (!entry)
       return makeError(ErrorCode::NotFound, prefix + ".brdf: unknown BRDF '" + brdfName + "'", prefix + ".brdf");
     obj.brdf = entry->definition;

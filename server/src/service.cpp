@@ -45,6 +45,23 @@ void RenderSlots::shutdown() {
   cv_.notify_all();
 }
 
+bool OwnerCounter::take(const std::string& owner, int limit, int& held) {
+  std::lock_guard lock(mutex_);
+  int& n = held_[owner];
+  held = n;
+  if (limit > 0 && n >= limit) {
+    if (n == 0) held_.erase(owner);
+    return false;
+  }
+  ++n;
+  return true;
+}
+
+void OwnerCounter::release(const std::string& owner) {
+  std::lock_guard lock(mutex_);
+  if (auto it = held_.find(owner); it != held_.end() && --it->second <= 0) held_.erase(it);
+}
+
 nlohmann::json defaultSessionSceneJson() {
   return {{"environment", {{"name", "sky"}, {"visible", true}}},
           {"objects", nlohmann::json::array({{{"mesh", "sphere"}, {"brdf", "ggx"}}})},
@@ -56,7 +73,7 @@ namespace {
 // Applies `json` to the session; returns the error message on failure.
 std::optional<std::string> tryApply(Service& service, Session& session, std::unique_lock<std::mutex>& lock,
                                     const nlohmann::json& json) {
-  Result<Scene> scene = sceneFromJson(json, service.resolver());
+  Result<Scene> scene = sceneFromJson(json, service.resolver(localIdentity()));
   if (!scene) return scene.error().message;
   Result<void> applied = session.applyScene(lock, scene.value(), sceneToJson(scene.value()));
   if (!applied) return applied.error().message;
@@ -76,6 +93,9 @@ Result<std::unique_ptr<Service>> Service::create(const ServerConfig& config, std
   std::error_code ec;
   std::filesystem::create_directories(config.dataDir, ec);
   if (ec) log.push_back("warning: cannot create data directory " + config.dataDir + ": " + ec.message());
+  Result<std::unique_ptr<Authenticator>> auth = Authenticator::create(config, log);
+  if (!auth) return auth.takeError();
+  service->auth = std::move(auth.value());
 
   RendererOptions options;
   options.deviceName = config.deviceName;
@@ -119,15 +139,14 @@ Result<std::unique_ptr<Service>> Service::create(const ServerConfig& config, std
   for (std::string& msg : service->assets->load(config.environmentDirs)) log.push_back(std::move(msg));
 
   for (std::string& msg :
-       service->library.loadBuiltins((std::filesystem::path(config.root) / "shaders" / "brdfs").string()))
-    log.push_back("warning: " + msg);
-  for (std::string& msg : service->library.loadUserDir(service->userBrdfDir())) log.push_back("warning: " + msg);
-  service->library.setPresetRoot((std::filesystem::path(config.dataDir) / "presets").string());
+       service->brdfs.load((std::filesystem::path(config.root) / "shaders" / "brdfs").string(), config.dataDir))
+    log.push_back(std::move(msg));
   service->jobs = std::make_unique<JobManager>(service->renderer, kJobWorkers, service->idPrefix());
-  if (config.hotLoad) service->hotLoader.start(service->renderer, service->library.list());
+  if (config.hotLoad) service->hotLoader.start(service->renderer, service->brdfs.list());
 
   service->sessions = std::make_unique<SessionManager>(
-      service->renderer, std::chrono::milliseconds(std::chrono::seconds(config.idleTimeoutSec)), kMaxSessions,
+      service->renderer, std::chrono::milliseconds(std::chrono::seconds(config.idleTimeoutSec)),
+      static_cast<size_t>(config.maxSessions),
       std::chrono::milliseconds(std::chrono::seconds(config.sessionReclaimSec)), service->idPrefix(),
       &service->metrics);
   SessionManager::Created created = service->sessions->create(kDefaultSessionId);
@@ -148,23 +167,30 @@ Result<std::unique_ptr<Service>> Service::create(const ServerConfig& config, std
   return service;
 }
 
-SceneResolver Service::resolver(std::shared_ptr<const BrdfDefinition> inlineBrdf) const {
+SceneResolver Service::resolver(const Identity& who, std::shared_ptr<const BrdfDefinition> inlineBrdf) {
   // Another replica's uploads since the last look become names a scene may use.
   if (assets) assets->refreshFromDisk();
   SceneResolver r;
-  r.library = &library;
+  // Someone else's BRDF resolves exactly like one that does not exist.
+  r.findBrdf = [this, who](std::string_view name) -> std::shared_ptr<const BrdfEntry> {
+    auto entry = brdfs.find(name);
+    return entry && canReadBrdf(who, *entry) ? entry : nullptr;
+  };
   r.inlineBrdf = std::move(inlineBrdf);
-  r.environments = renderer->environmentNames();
-  r.meshes = renderer->meshNames();
-  r.textures = renderer->textureNames();
+  auto visible = [&](std::vector<std::string> names) {
+    if (assets)
+      std::erase_if(names, [&](const std::string& n) { return !assets->visible(n, who.user, who.teacher()); });
+    return names;
+  };
+  r.environments = visible(renderer->environmentNames());
+  r.meshes = visible(renderer->meshNames());
+  r.textures = visible(renderer->textureNames());
   return r;
 }
 
 size_t Service::maxRequestBody() const {
   return std::max<size_t>(kMaxJsonBody, static_cast<size_t>(config.maxUploadBytes) + kMultipartOverhead);
 }
-
-std::string Service::userBrdfDir() const { return (std::filesystem::path(config.dataDir) / "brdfs").string(); }
 
 void Service::beginShutdown() {
   stopping = true;

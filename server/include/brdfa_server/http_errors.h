@@ -32,6 +32,11 @@ void sendError(httplib::Response& res, const Error& error);
 void sendError(httplib::Response& res, int status, const std::string& code, const std::string& message,
                const std::string& field = {});
 
+// 429 quota_exceeded: one person is past one of their quotas (config.h's Quotas); `message`
+// says how to free room. {"error", "quota", "limit", "used", "message"}.
+void sendQuotaExceeded(httplib::Response& res, const std::string& quota, uint64_t limit, uint64_t used,
+                       const std::string& message);
+
 void sendJson(httplib::Response& res, const nlohmann::json& body, int status = 200);
 
 // Default "error" code for a bare HTTP status (used by the error handler for responses that

@@ -7,6 +7,7 @@
 #include <map>
 #include <memory>
 #include <nlohmann/json.hpp>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -18,7 +19,8 @@ namespace brdfa::server {
 
 // What names in a scene can resolve to.
 struct SceneResolver {
-  const BrdfLibrary* library = nullptr;
+  // The BRDF a name means to this scene's requester; null (and no function) is "unknown".
+  std::function<std::shared_ptr<const BrdfEntry>(std::string_view)> findBrdf;
   // The BRDF that objects named "inline" use (one-shot renders); null = "inline" is refused.
   std::shared_ptr<const BrdfDefinition> inlineBrdf;
   std::vector<std::string> environments;

@@ -6,15 +6,18 @@
 #include <chrono>
 #include <condition_variable>
 #include <memory>
+#include <map>
 #include <mutex>
 #include <string>
 #include <vector>
 
 #include "brdfa/renderer.h"
 #include "brdfa_server/asset_store.h"
-#include "brdfa_server/brdf_library.h"
+#include "brdfa_server/authenticator.h"
+#include "brdfa_server/brdf_catalog.h"
 #include "brdfa_server/config.h"
 #include "brdfa_server/hot_load.h"
+#include "brdfa_server/identity.h"
 #include "brdfa_server/jobs.h"
 #include "brdfa_server/metrics.h"
 #include "brdfa_server/scene_json.h"
@@ -25,8 +28,8 @@ namespace brdfa::server {
 
 class ConnectionRegistry;
 
-// Limits that keep one client from starving the others (DESIGN.md section 6).
-inline constexpr size_t kMaxSessions = 32;                  // including `default`; 429 beyond
+// Limits that keep one client from starving the others (docs/design.md section 6); --max-sessions
+// sets the session cap.
 inline constexpr int kMaxStreams = 48;                      // concurrent stream clients; 503 beyond
 inline constexpr int kMaxConcurrentRenders = 2;             // one-shot renders at once
 inline constexpr std::chrono::seconds kRenderSlotWait{30};  // then 503 busy
@@ -66,11 +69,28 @@ class RenderSlots {
   DurationRecorder* waits_ = nullptr;
 };
 
-struct Service {
-  // <dataDir>/brdfs (saved user BRDFs); presets live in <dataDir>/presets/<brdf>
-  // (library.presetDir).
-  std::string userBrdfDir() const;
+// Things each person holds at once (one-shot renders in flight), counted per owner. Thread-safe.
+class OwnerCounter {
+ public:
+  // Takes one for `owner` unless they hold `limit` already (0: no limit); `held` gets how many
+  // they hold (before this one).
+  bool take(const std::string& owner, int limit, int& held);
+  void release(const std::string& owner);
 
+ private:
+  std::mutex mutex_;
+  std::map<std::string, int> held_;
+};
+
+// May `who` read BRDF `entry`? Built-ins, the course's and shared ones are everyone's.
+inline bool canReadBrdf(const Identity& who, const BrdfEntry& entry) {
+  return canRead(who, entry.owner, entry.builtin || entry.owner.empty() || entry.shared);
+}
+inline bool canReadBrdf(const Identity& who, const BrokenBrdf& broken) {
+  return canRead(who, broken.owner, broken.owner.empty() || broken.shared);
+}
+
+struct Service {
   // Opens the device, loads the built-in and saved user BRDFs (parsed only) and sets up the `default` session (its scene is
   // applied lazily, on first use). `log` receives start-up warnings.
   static Result<std::unique_ptr<Service>> create(const ServerConfig& config, std::vector<std::string>& log);
@@ -78,8 +98,15 @@ struct Service {
   // The largest request body the HTTP layer reads: a JSON body or an upload with its framing.
   size_t maxRequestBody() const;
 
-  // Name resolution for scene JSON; `inlineBrdf` enables objects with "brdf": "inline".
-  SceneResolver resolver(std::shared_ptr<const BrdfDefinition> inlineBrdf = nullptr) const;
+  // Name resolution for scene JSON of `who`: the BRDFs and uploads they may read;
+  // `inlineBrdf` enables objects with "brdf": "inline".
+  SceneResolver resolver(const Identity& who, std::shared_ptr<const BrdfDefinition> inlineBrdf = nullptr);
+
+  // A quota of `who` (config.quotas' field): 0 (no limit) for the teacher.
+  template <class T>
+  T quotaFor(const Identity& who, T Quotas::*field) const {
+    return who.teacher() ? T(0) : config.quotas.*field;
+  }
 
   // Wakes every waiter and stops every session: streams end, frame waits return, one-shot
   // renders abort between passes.
@@ -91,7 +118,9 @@ struct Service {
   // "<replica>." with --replica, else empty: the start of session and job ids.
   std::string idPrefix() const { return config.replica.empty() ? std::string() : config.replica + "."; }
   std::shared_ptr<Renderer> renderer;  // declared before sessions: views die before the device
-  BrdfLibrary library;
+  std::unique_ptr<Authenticator> auth;  // who a request acts for (--auth)
+  BrdfCatalog brdfs;                    // built-ins, the course's and every student's
+  OwnerCounter rendersInFlight;         // one-shot renders and analyses, per person (--quota-renders)
   RenderSlots uploadSlots{kMaxConcurrentUploadChecks, kMaxQueuedUploadChecks};
   // Upload bodies in flight, in bytes: their share of --max-memory (memoryBudgetBytes / 8), the
   // renderer has the rest.
