@@ -22,6 +22,7 @@ export function addClassTab(nav, before) {
   button.setAttribute('role', 'tab');
   button.dataset.tab = 'tab-class';
   nav.insertBefore(button, nav.querySelector(`[data-tab="${before}"]`));
+  nav.classList.add('wrap');   // one tab more than the column is wide for: a second row
   const page = make('div', 'tab-page panel');
   page.id = 'tab-class';
   page.setAttribute('role', 'tabpanel');
@@ -62,6 +63,11 @@ export function mountClass(el) {
   let running = false;
   const shown = () => state.visible && state.tab === 'tab-class';
 
+  const thumb = () => {
+    const img = make('img', 'class-thumb');
+    img.draggable = false;
+    return img;
+  };
   const ownerOf = (s) => s.owner_display_name || s.owner || (s.id === 'default' ? 'default (shared)' : '(no owner)');
 
   function item(s) {
@@ -71,16 +77,12 @@ export function mountClass(el) {
       li.dataset.session = s.id;
       const pick = make('button', 'class-pick');
       pick.type = 'button';
-      const img = make('img', 'class-thumb');
-      img.draggable = false;
+      const img = thumb();
       const owner = make('span', 'class-owner');
       const id = make('span', 'class-id hint', s.id === state.session ? `${s.id} (this tab)` : s.id);
       pick.append(img, owner, id);
       li.append(pick);
       it = { li, img, owner, loading: false };
-      const settled = () => { it.loading = false; };
-      img.addEventListener('load', settled);
-      img.addEventListener('error', settled);
       pick.addEventListener('click', () => watchSession(s.id));
       items.set(s.id, it);
     }
@@ -128,7 +130,12 @@ export function mountClass(el) {
         // A thumbnail still loading keeps its request: a slow server gets one at a time.
         if (it.loading) continue;
         it.loading = true;
-        it.img.src = api.frameUrl(it.session.id, nonce++);
+        // Loaded beside the one shown, which it replaces once whole: no blank while loading.
+        const next = thumb();
+        next.alt = it.img.alt;
+        next.addEventListener('load', () => { it.img.replaceWith(next); it.img = next; it.loading = false; });
+        next.addEventListener('error', () => { it.loading = false; });
+        next.src = api.frameUrl(it.session.id, nonce++);
       }
       if (watched && !ids.has(watched)) watchName.textContent = `${watched}: the session has ended`;
       status.textContent = `${sessions.length} session${sessions.length === 1 ? '' : 's'}`;
