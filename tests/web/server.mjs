@@ -1,13 +1,14 @@
 // Starts the real brdfa-server on a free port (--port 0) with a throw-away data folder and
 // resolves with its base URL once it prints `listening on http://HOST:PORT` (docs/api.md).
+// `args`: more command-line flags (auth.mjs: --auth tokens --admin-token-file F).
 import { spawn } from 'node:child_process';
 import { mkdtempSync, rmSync } from 'node:fs';
 import { tmpdir } from 'node:os';
 import { join } from 'node:path';
 
-export async function startServer(binary, root) {
+export async function startServer(binary, root, { args = [] } = {}) {
   const dataDir = mkdtempSync(join(tmpdir(), 'brdfa-web-'));
-  const proc = spawn(binary, ['--port', '0', '--root', root, '--data-dir', dataDir], {
+  const proc = spawn(binary, ['--port', '0', '--root', root, '--data-dir', dataDir, ...args], {
     stdio: ['ignore', 'pipe', 'pipe'],
   });
   let stderr = '';
@@ -24,6 +25,7 @@ export async function startServer(binary, root) {
   });
   return {
     url,
+    dataDir,
     stderr: () => stderr,
     async stop() {
       proc.removeAllListeners('exit');
