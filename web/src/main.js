@@ -26,7 +26,10 @@ import { addClassTab, mountClass } from './panels/class.js';
 import * as api from './api.js';
 
 const $ = (id) => document.getElementById(id);
-const visibility = () => set({ visible: document.visibilityState === 'visible' });
+// `visible`: the view can be seen. Not while the token screen covers the page: streams and
+// polls stop then.
+let covered = false;
+const visibility = () => set({ visible: document.visibilityState === 'visible' && !covered });
 document.addEventListener('visibilitychange', visibility);
 visibility();
 
@@ -38,6 +41,8 @@ function start(me) {
   api.onUnauthorized(() => {
     if (asked) return;
     asked = true;
+    covered = true;
+    visibility();
     authenticate($('auth'), { reason: 'This browser\'s token is no longer accepted (revoked, or the user was removed).' })
       .then(() => location.reload());
   });
