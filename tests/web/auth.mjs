@@ -208,25 +208,52 @@ function attackerSite(html) {
   });
 }
 
-/** Auto-submitting forms (text/plain: a JSON body without a preflight) at state-changing routes. */
-const forgeryPage = (server, code) => `<!doctype html><meta charset="utf-8"><title>another site</title>
-<iframe name="t1"></iframe><iframe name="t2"></iframe><iframe name="t3"></iframe>
-<form method="POST" enctype="text/plain" target="t1" action="${server}/api/sessions">
-  <input name='{"objects":[{"mesh":"sphere","brdf":"ggx"}],"x":"' value='"}'></form>
-<form method="POST" enctype="text/plain" target="t2" action="${server}/api/auth/join-codes">
-  <input name='{"ttl_minutes":60,"x":"' value='"}'></form>
-<form method="POST" enctype="text/plain" target="t3" action="${server}/api/auth/join">
-  <input name='{"code":"${code}","display_name":"forged","x":"' value='"}'></form>
-<script>for (const f of document.forms) f.submit();</script>`;
+/**
+ * A page of auto-submitting forms at the API `server`: each form {path, body, smuggle?} posts
+ * `body` as text/plain (a JSON body without a preflight). A form with `smuggle` posts instead a
+ * whole HTTP request as its body (name = the request, value empty: text/plain sends
+ * `name=value` CRLF): a server that answers the form without reading its body would read that
+ * body as the next request on the connection, one with no Origin to refuse.
+ */
+function forgeryPage(server, forms) {
+  const host = new URL(server).host;
+  const spec = forms.map((f) => ({
+    action: `${server}${f.path}`,
+    name: f.smuggle
+      ? `${f.smuggle.method} ${f.smuggle.path} HTTP/1.1\r\nHost: ${host}\r\nContent-Type: application/json\r\n` +
+        `Content-Length: ${Buffer.byteLength(f.smuggle.body)}\r\n\r\n${f.smuggle.body}`
+      : f.body.slice(0, -2),
+    value: f.smuggle ? '' : f.body.slice(-2),   // the JSON split before its closing `"}`, where the = goes
+  }));
+  return `<!doctype html><meta charset="utf-8"><title>another site</title><body>
+<script>
+const forms = ${JSON.stringify(spec)};
+forms.forEach((f, i) => {
+  const frame = document.createElement('iframe');
+  frame.name = 't' + i;
+  document.body.append(frame);
+  const form = document.createElement('form');
+  Object.assign(form, { method: 'POST', enctype: 'text/plain', action: f.action, target: frame.name });
+  const input = document.createElement('input');
+  input.type = 'hidden';
+  input.name = f.name;
+  input.value = f.value;
+  form.append(input);
+  document.body.append(form);
+  form.submit();
+});
+</script>`;
+}
 
 /** Opens the forgery page at `origin` in `context`; resolves the answers its forms got from the API. */
-async function submitForgeries(env, context, origin, label) {
+async function submitForgeries(env, server, context, origin, count, label) {
   const page = await context.newPage();
   page.label = label;
   const answers = [];
-  page.on('response', (r) => { if (r.url().startsWith(`${env.server.url}/api/`)) answers.push(r); });
+  page.on('response', (r) => { if (r.url().startsWith(`${server}/api/`)) answers.push(r); });
   await page.goto(`${origin}/`);
-  await until(`${label}: the three forms answered`, async () => answers.length >= 3, 15000);
+  await until(`${label}: ${count} forms answered`, async () => answers.length >= count, 15000).catch(() => {});
+  await sleep(1000);   // what a smuggled request would do, done
   const out = [];
   for (const r of answers) {
     const body = await r.text().catch(() => '');
@@ -234,6 +261,16 @@ async function submitForgeries(env, context, origin, label) {
   }
   await page.close();
   return out;
+}
+
+/** What went wrong with the answers of `count` forged forms: each should be 403 cross_site. */
+function forgeryProblems(answers, count, origin) {
+  const problems = [];
+  if (answers.length < count) problems.push(`from ${origin}: ${answers.length} of ${count} forms answered`);
+  for (const a of answers) {
+    if (a.status !== 403 || !/cross_site/.test(a.body)) problems.push(`POST ${a.path} from ${origin}: ${a.status} ${a.body}`);
+  }
+  return problems;
 }
 
 const checks = [
@@ -459,25 +496,44 @@ const checks = [
 
   ['forms posted from other origins change nothing (403 cross_site)', async (env) => {
     const before = { sessions: await sessionIds(env), codes: await joinCodeIds(env), users: await userNames(env) };
-    const site = await attackerSite(forgeryPage(env.server.url, env.code));
+    const forms = [
+      { path: '/api/sessions', body: '{"objects":[{"mesh":"sphere","brdf":"ggx"}],"x":""}' },
+      { path: '/api/auth/join-codes', body: '{"ttl_minutes":60,"x":""}' },
+      { path: '/api/auth/join', body: `{"code":"${env.code}","display_name":"forged","x":""}` },
+      // Joining needs no token: smuggled past the gate, it would make a user.
+      { path: '/api/sessions', smuggle: { method: 'POST', path: '/api/auth/join', body: `{"code":"${env.code}","display_name":"smuggled"}` } },
+    ];
+    const site = await attackerSite(forgeryPage(env.server.url, forms));
+    const problems = [];
     try {
       // Another port on the same host (another origin, same site), and another host (cross-site),
       // opened in the teacher's browser (which holds the admin token for the API's origin).
       for (const origin of [`http://127.0.0.1:${site.port}`, `http://localhost:${site.port}`]) {
-        const answers = await submitForgeries(env, env.teacher.context(), origin, `forgery from ${origin}`);
+        const answers = await submitForgeries(env, env.server.url, env.teacher.context(), origin, forms.length, `forgery from ${origin}`);
         console.log(`FORGERY from ${origin}: ${answers.map((a) => `${a.path} ${a.status}`).join(', ')}`);
-        for (const a of answers) {
-          assert.equal(a.status, 403, `POST ${a.path} from ${origin}: ${a.status} ${a.body}`);
-          assert.match(a.body, /cross_site/, `POST ${a.path} from ${origin} names cross_site: ${a.body}`);
-        }
+        problems.push(...forgeryProblems(answers, forms.length, origin));
       }
     } finally {
       await site.close();
     }
-    await sleep(500);
-    assert.deepEqual(await sessionIds(env), before.sessions, 'no session made');
-    assert.deepEqual(await joinCodeIds(env), before.codes, 'no join code made');
-    assert.deepEqual(await userNames(env), before.users, 'nobody joined');
+    const after = { sessions: await sessionIds(env), codes: await joinCodeIds(env), users: await userNames(env) };
+    if (JSON.stringify(after.sessions) !== JSON.stringify(before.sessions)) problems.push(`sessions ${before.sessions} -> ${after.sessions}`);
+    if (JSON.stringify(after.codes) !== JSON.stringify(before.codes)) problems.push(`join codes ${before.codes} -> ${after.codes}`);
+    if (JSON.stringify(after.users) !== JSON.stringify(before.users)) problems.push(`users ${before.users} -> ${after.users}`);
+    assert.deepEqual(problems, [], 'forged forms: all refused (403 cross_site), nothing changed');
+  }],
+
+  ['a token the teacher revokes: the open page asks for a token and stops its stream', async (env) => {
+    const s = STUDENTS[0];
+    const user = (await admin(env, 'GET', '/api/auth/users')).find((u) => u.user === s.user);
+    assert.ok(user && user.tokens.length === 1, `${s.user} has one token`);
+    await admin(env, 'DELETE', `/api/auth/users/${encodeURIComponent(s.user)}/tokens/${encodeURIComponent(user.tokens[0].id)}`);
+    const { page } = s;
+    await page.locator('#auth .auth-token').waitFor({ state: 'visible', timeout: 15000 });
+    await showsText(page, 'no longer accepted', '#auth .auth-reason');
+    assert.equal(await page.locator('main').isVisible(), false, 'the app is covered');
+    await until('the view\'s stream closed', async () => !(await page.locator('#viewer img').getAttribute('src'))?.includes('/stream'));
+    await page.screenshot({ path: join(env.artifacts, 'auth-07-revoked.png') });
   }],
 
   ['sign out revokes the student\'s token; the page asks for one again', async (env) => {
@@ -503,25 +559,25 @@ async function noneModeForgery(env, opt) {
   try {
     const ids = async () => (await (await fetch(`${server.url}/api/sessions`)).json()).map((s) => s.id).sort();
     const before = await ids();
-    const site = await attackerSite(`<!doctype html><iframe name="t"></iframe>
-<form method="POST" enctype="text/plain" target="t" action="${server.url}/api/sessions">
-  <input name='{"objects":[{"mesh":"sphere","brdf":"ggx"}],"x":"' value='"}'></form>
-<script>document.forms[0].submit();</script>`);
+    const forms = [
+      { path: '/api/sessions', body: '{"objects":[{"mesh":"sphere","brdf":"ggx"}],"x":""}' },
+      { path: '/api/sessions', smuggle: { method: 'POST', path: '/api/sessions', body: '{}' } },
+    ];
+    const site = await attackerSite(forgeryPage(server.url, forms));
     const context = await env.browser.newContext();
+    const problems = [];
     try {
-      const page = await context.newPage();
-      const answers = [];
-      page.on('response', (r) => { if (r.url().startsWith(`${server.url}/api/`)) answers.push(r); });
-      await page.goto(`http://localhost:${site.port}/`);
-      await until('the form answered', async () => answers.length >= 1, 15000);
-      console.log(`FORGERY none mode: POST /api/sessions ${answers[0].status()}`);
-      assert.equal(answers[0].status(), 403, `none mode: a cross-site form POST /api/sessions: ${answers[0].status()}`);
+      const origin = `http://localhost:${site.port}`;
+      const answers = await submitForgeries(env, server.url, context, origin, forms.length, 'none-mode forgery');
+      console.log(`FORGERY none mode from ${origin}: ${answers.map((a) => `${a.path} ${a.status}`).join(', ')}`);
+      problems.push(...forgeryProblems(answers, forms.length, origin));
     } finally {
       await context.close();
       await site.close();
     }
-    await sleep(500);
-    assert.deepEqual(await ids(), before, 'none mode: no session made by the form');
+    const after = await ids();
+    if (JSON.stringify(after) !== JSON.stringify(before)) problems.push(`sessions ${before} -> ${after}`);
+    assert.deepEqual(problems, [], 'none mode: forged forms refused (403 cross_site), no session made');
   } finally {
     await server.stop();
   }
