@@ -18,6 +18,7 @@ import { sig } from '../format.js';
 const KINDS = ['polar', 'lobe', 'slice', 'albedo'];   // the quick ones first
 const RETRY_MS = 1000;   // after 503 busy (analyses share the one-shot render queue)
 
+// Constant markup, parsed once: no value is ever interpolated into it (names go in as text).
 const MARKUP = `
   <div class="row">
     <label title="the light's polar angle: the polar plot and the lobe are for it; albedo and slice mark it">θ<sub>i</sub>

@@ -16,6 +16,7 @@ import { errPct, sig } from '../format.js';
 
 const PERIOD_MS = 500;
 
+// Constant markup, parsed once: no value is ever interpolated into it (names go in as text).
 const MARKUP = `
   <div class="row">
     <label title="what B renders in place of the selected object's BRDF">B: BRDF <select class="sbs-brdf"></select></label>
