@@ -4,6 +4,7 @@
 #include <string_view>
 
 #include "brdfa_server/auth_crypto.h"
+#include "brdfa_server/connection_guard.h"
 #include "brdfa_server/http_errors.h"
 #include "routes.h"
 
@@ -71,6 +72,16 @@ bool isPublic(const httplib::Request& req) {
   return isViewKeyRead(req);
 }
 
+// Refused before its body was read: the connection closes after the answer, else the unread body
+// (a cross-site form can make it a whole request) would be read as the next request.
+httplib::Server::HandlerResponse refuse(httplib::Response& res, int status, const std::string& code,
+                                        const std::string& message) {
+  sendError(res, status, code, message);
+  res.set_header("Connection", "close");
+  closeAfterThisResponse();
+  return httplib::Server::HandlerResponse::Handled;
+}
+
 }  // namespace
 
 void registerAccessGate(httplib::Server& server, Service& service) {
@@ -79,26 +90,21 @@ void registerAccessGate(httplib::Server& server, Service& service) {
     tCurrent.identity.reset();
     if (isStateChanging(req.method)) {
       // A cross-site form or fetch can change nothing, whatever it carries.
-      if (fromAnotherSite(req)) {
-        sendError(res, 403, "cross_site", "state-changing requests from a page of another site are refused");
-        return httplib::Server::HandlerResponse::Handled;
-      }
+      if (fromAnotherSite(req))
+        return refuse(res, 403, "cross_site", "state-changing requests from a page of another site are refused");
       // proxy mode: the front's sign-on cookie is ambient, so a request must also carry a header
       // that no cross-site form can set.
-      if (service.auth->mode() == AuthMode::Proxy && !req.has_header("X-Brdfa-Client")) {
-        sendError(res, 403, "cross_site",
-                  "state-changing requests need the header X-Brdfa-Client (any value) behind a sign-on proxy");
-        return httplib::Server::HandlerResponse::Handled;
-      }
+      if (service.auth->mode() == AuthMode::Proxy && !req.has_header("X-Brdfa-Client"))
+        return refuse(res, 403, "cross_site",
+                      "state-changing requests need the header X-Brdfa-Client (any value) behind a sign-on proxy");
     }
     tCurrent.identity = service.auth->identify(req);
     if (!tCurrent.identity && !isPublic(req)) {
       res.set_header("WWW-Authenticate", "Bearer realm=\"brdfa\"");
-      sendError(res, 401, "unauthorized",
-                service.auth->mode() == AuthMode::Proxy
-                    ? "no signed-in user: sign in through the site's front"
-                    : "send your token as 'Authorization: Bearer <token>' (from a join link, or from the teacher)");
-      return httplib::Server::HandlerResponse::Handled;
+      return refuse(res, 401, "unauthorized",
+                    service.auth->mode() == AuthMode::Proxy
+                        ? "no signed-in user: sign in through the site's front"
+                        : "send your token as 'Authorization: Bearer <token>' (from a join link, or from the teacher)");
     }
     return httplib::Server::HandlerResponse::Unhandled;
   });

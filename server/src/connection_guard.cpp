@@ -1,5 +1,6 @@
 #include "brdfa_server/connection_guard.h"
 
+#include <utility>
 #include <netdb.h>
 #include <poll.h>
 #include <sys/socket.h>
@@ -29,6 +30,8 @@ constexpr size_t kMaxLingering = 256;
 
 // When the listener accepted the socket this worker is about to serve (see StampingQueue).
 thread_local Clock::time_point tAcceptedAt{};
+// Set by closeAfterThisResponse() while a request of this worker's connection is handled.
+thread_local bool tCloseAfterResponse = false;
 
 // httplib 0.11 enqueues one task per accepted socket, on the listener thread right after
 // accept(). Stamping the time there lets the request deadline count from the accept, so a
@@ -317,6 +320,8 @@ bool GuardedServer::widenBacklog(int backlog) {
   return svr_sock_ != INVALID_SOCKET && ::listen(svr_sock_, backlog) == 0;
 }
 
+void closeAfterThisResponse() { tCloseAfterResponse = true; }
+
 bool GuardedServer::process_and_close_socket(socket_t sock) {
   const Clock::time_point acceptedAt = tAcceptedAt == Clock::time_point{} ? Clock::now() : tAcceptedAt;
   tAcceptedAt = {};
@@ -331,6 +336,7 @@ bool GuardedServer::process_and_close_socket(socket_t sock) {
     return false;
   }
   bool ret = false;
+  bool unreadBody = false;
   {
     auto ms = [](time_t sec, time_t usec) { return milliseconds(sec * 1000 + usec / 1000); };
     DeadlineStream strm(sock, address, port, svr_sock_, ms(read_timeout_sec_, read_timeout_usec_),
@@ -341,11 +347,21 @@ bool GuardedServer::process_and_close_socket(socket_t sock) {
       strm.expectRequest(deadline, limits_.requestReadTimeout);
       if (!strm.waitForRequest(Clock::now() + std::chrono::seconds(keep_alive_timeout_sec_))) break;
       bool closed = false;
+      tCloseAfterResponse = false;
       ret = process_request(strm, left == 1, closed, [&strm](httplib::Request&) { strm.expectBody(); });
-      if (!ret || closed || strm.broken()) break;
+      // A request answered before its body was read: what follows on the socket is that body,
+      // which must never be read as a request of its own.
+      unreadBody = std::exchange(tCloseAfterResponse, false);
+      if (!ret || closed || strm.broken() || unreadBody) break;
       deadline = Clock::now() + limits_.requestReadTimeout;
     }
     registry_.remove(address, port);
+  }
+  if (unreadBody) {
+    // Dropped, not reset: the client still reads the answer it was sent.
+    ::shutdown(sock, SHUT_WR);
+    closer_.add(sock);
+    return ret;
   }
   ::shutdown(sock, SHUT_RDWR);
   ::close(sock);

@@ -79,6 +79,10 @@ class LingeringCloser {
 
 // httplib::Server whose connections go through the registry and the read deadlines. It owns
 // the worker pool (`limits.threads`); leave new_task_queue alone.
+// Called from a handler (the pre-routing gate) that answers without reading the request's body:
+// the connection is closed after this response, so the unread body is never parsed as a request.
+void closeAfterThisResponse();
+
 class GuardedServer : public httplib::Server {
  public:
   explicit GuardedServer(const ConnectionLimits& limits);
