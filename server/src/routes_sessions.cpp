@@ -201,6 +201,11 @@ std::shared_ptr<Session> sessionOr404(Service& service, const httplib::Request& 
   // Someone else's session answers exactly as one that does not exist.
   const bool mayRead =
       session && (canReadSession(who, *session) || (access == SessionAccess::ReadWithKey && hasViewKey(req, *session)));
+  if (!mayRead && !requesterKnown(req)) {  // a view-key read without the right key: as any tokenless request
+    res.set_header("WWW-Authenticate", "Bearer realm=\"brdfa\"");
+    sendError(res, 401, "unauthorized", "this key does not read session '" + id + "'; send a token or the view key");
+    return nullptr;
+  }
   if (!mayRead) {
     sendError(res, 404, "not_found", "no session '" + id + "'", "session");
     return nullptr;
