@@ -1,4 +1,4 @@
-// Physics through the whole service: POST /api/render in the white furnace (DESIGN.md section 4:
+// Physics through the whole service: POST /api/render in the white furnace (docs/design.md section 4:
 // a white Lambertian sphere in the furnace renders exactly 1.0 in linear float output).
 #include <cmath>
 

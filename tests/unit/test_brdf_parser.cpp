@@ -1,4 +1,4 @@
-// parseBrdf(): the .brdf contract of DESIGN.md section 3.
+// parseBrdf(): the .brdf contract of docs/design.md section 3.
 #include <gtest/gtest.h>
 
 #include <string>

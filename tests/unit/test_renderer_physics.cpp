@@ -173,7 +173,7 @@ TEST_F(RendererPhysics, VisibleEnvironmentIsTheBackgroundAtItsIntensity) {
 }
 
 // BRDFA Engine render() files run as that engine ran them: the plain average of render() over
-// uniform hemisphere samples (DESIGN.md section 3), reading `skybox`, iParameter0..8,
+// uniform hemisphere samples (docs/design.md section 3), reading `skybox`, iParameter0..8,
 // iTexture0 and the world-to-local matrix.
 TEST_F(RendererPhysics, LegacyRenderIsThePlainAverageOverTheHemisphere) {
   struct Case {

@@ -1,4 +1,4 @@
-// The BRDF file contract (DESIGN.md section 3): Disney BRDF Explorer's .brdf text format.
+// The BRDF file contract (docs/design.md section 3): Disney BRDF Explorer's .brdf text format.
 #pragma once
 
 #include <array>

@@ -1,4 +1,4 @@
-// The scene a RenderView draws: the resolved form of DESIGN.md's scene JSON.
+// The scene a RenderView draws: the resolved form of docs/design.md's scene JSON.
 // Names (mesh, environment) are resolved by the renderer; BRDFs arrive already parsed.
 #pragma once
 

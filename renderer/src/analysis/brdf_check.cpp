@@ -220,7 +220,7 @@ Result<void> RendererImpl::runCheckKernel(const BrdfDefinition& brdf, const char
     writes.push_back({VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET, nullptr, sets[1], binding, 0, 1,
                       VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, nullptr, &paramInfo, nullptr});
   vkUpdateDescriptorSets(ctx.device(), static_cast<uint32_t>(writes.size()), writes.data(), 0, nullptr);
-  writeDefaultTextures(sets[1]);  // textures read as white, the neutral value of DESIGN.md
+  writeDefaultTextures(sets[1]);  // textures read as white, the neutral value of docs/design.md
 
   for (const auto& setting : settings) {
     std::vector<uint8_t> packed = layout.pack(brdf, setting);

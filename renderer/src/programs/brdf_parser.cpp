@@ -1,4 +1,4 @@
-// Parser for Disney BRDF Explorer's .brdf text format (DESIGN.md section 3).
+// Parser for Disney BRDF Explorer's .brdf text format (docs/design.md section 3).
 //
 // Follows the Explorer's own reader (BRDFBase::loadBRDF) where it is well defined: '#' starts a
 // comment outside GLSL, sections are `::begin X` ... `::end X` and cannot nest, parameter lines

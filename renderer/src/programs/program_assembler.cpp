@@ -1,4 +1,4 @@
-// Program assembly in the fixed order of DESIGN.md section 2. The only subtle part is line
+// Program assembly in the fixed order of docs/design.md section 2. The only subtle part is line
 // mapping: user text is emitted under `#line <file line> 1` and everything else under
 // `#line <k> 0`, so glslang reports user errors against the submitted file (source string 1)
 // and generated code against the assembled source (source string 0). With `#version 450`

@@ -1,4 +1,4 @@
-// Assembles a shading program in the fixed order of DESIGN.md section 2:
+// Assembles a shading program in the fixed order of docs/design.md section 2:
 //   prelude (#version, extensions, defines), generated uniforms (the BRDF's parameter block),
 //   common code (shaders/lib), the BRDF (user text under `#line`), the integrator (with main).
 #pragma once

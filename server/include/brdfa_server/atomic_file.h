@@ -1,4 +1,4 @@
-// Crash-safe file writes for the data folder (DESIGN.md section 6): a reader, or the server
+// Crash-safe file writes for the data folder (docs/design.md section 6): a reader, or the server
 // after a crash at any moment, sees either the old complete file or the new complete file.
 #pragma once
 

@@ -134,7 +134,7 @@ class Session {
   static constexpr std::chrono::milliseconds kPublishInterval{33};
   // The frame interval a streamed session aims at: while a stream client watches, each pass is
   // sized to it less the time a frame's read takes (RenderView::renderPass's frame target).
-  // Unwatched, passes keep samples_per_frame. DESIGN.md section 5 asks for at least 20 frames/s;
+  // Unwatched, passes keep samples_per_frame. docs/design.md section 5 asks for at least 20 frames/s;
   // 42 ms (~24/s) leaves a margin for passes that overrun their plan (the encoder thread and the
   // render worker's round trips share two cores with the device's threads). Where one sample
   // is longer than the frame (mis at 512^2 on a 2-core VM), what keeps the still stream near
