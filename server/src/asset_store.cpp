@@ -475,6 +475,8 @@ Result<AssetRecord> AssetStore::add(const AssetUpload& up, AssetRejection& rejec
                         " bytes are left, the file has " + std::to_string(up.size));
     return std::nullopt;
   };
+  // Other replicas' uploads count against the same quotas and caps: the folder is shared.
+  refreshFromDisk();
   {
     std::lock_guard lock(mutex_);
     if (auto full = storageFull()) return *full;
@@ -507,6 +509,7 @@ Result<AssetRecord> AssetStore::add(const AssetUpload& up, AssetRejection& rejec
   rec.height = info->height;
   rec.created = nowIso8601();
   rec.owner = owner.user;
+  refreshFromDisk();  // the check took a while: look at the folder again before reserving
   {
     std::lock_guard lock(mutex_);
     if (auto full = storageFull()) return *full;
