@@ -174,17 +174,42 @@ bool writeNextPart(Service& service, Session& session, StreamState& state, httpl
   return true;
 }
 
+// Whose a session is, for the teacher only.
+void addOwner(nlohmann::json& out, const SessionOwnership& ownership, const Identity& who) {
+  if (!who.teacher()) return;
+  out["owner"] = ownership.user.empty() ? nlohmann::json(nullptr) : nlohmann::json(ownership.user);
+  out["owner_display_name"] = ownership.displayName;
+}
+
 // What a reader of the session sees of it: the teacher also whose it is.
-nlohmann::json sessionSummary(Session& s, const Identity& who) {
+nlohmann::json sessionSummary(Session& s, const Identity& who, const std::string& replica) {
   nlohmann::json out{{"id", s.id()},
                      {"stats", statsToJson(s.stats(), s.renderError(), s.renderSettings())},
                      {"stream_clients", s.streamClients()},
                      {"view_key", s.ownership().viewKey}};
-  if (who.teacher()) {
-    out["owner"] = s.owner().empty() ? nlohmann::json(nullptr) : nlohmann::json(s.owner());
-    out["owner_display_name"] = s.ownership().displayName;
-  }
+  if (!replica.empty()) out["replica"] = replica;
+  addOwner(out, s.ownership(), who);
   return out;
+}
+
+// A session of another replica: its stats live there (GET /api/sessions/{id} through the
+// balancer reaches it).
+nlohmann::json remoteSummary(const RemoteSession& s, const Identity& who) {
+  nlohmann::json out{{"id", s.id},
+                     {"stats", nullptr},
+                     {"stream_clients", nullptr},
+                     {"view_key", s.ownership.viewKey},
+                     {"replica", s.replica}};
+  addOwner(out, s.ownership, who);
+  return out;
+}
+
+// How many sessions `who` holds on the other replicas of this data folder.
+size_t sessionsElsewhere(Service& service, const Identity& who) {
+  if (!service.directory) return 0;
+  size_t n = 0;
+  for (const RemoteSession& s : service.directory->others()) n += s.ownership.user == who.owner();
+  return n;
 }
 
 }  // namespace
@@ -234,7 +259,10 @@ void registerSessionRoutes(httplib::Server& server, Service& service) {
     const Identity& who = requester(req);
     nlohmann::json list = nlohmann::json::array();
     for (auto& s : service.sessions->list())
-      if (canReadSession(who, *s)) list.push_back(sessionSummary(*s, who));
+      if (canReadSession(who, *s)) list.push_back(sessionSummary(*s, who, service.config.replica));
+    if (service.directory)
+      for (const RemoteSession& s : service.directory->others())
+        if (canRead(who, s.ownership.user)) list.push_back(remoteSummary(s, who));
     sendJson(res, list);
   });
 
@@ -252,13 +280,18 @@ void registerSessionRoutes(httplib::Server& server, Service& service) {
     Result<Scene> scene = sceneFromJson(body, service.resolver(who), &notes);
     if (!scene) return sendError(res, scene.error());
     const int quota = service.quotaFor(who, &Quotas::sessions);
-    SessionManager::Created created =
-        service.sessions->create({}, SessionOwnership{who.owner(), who.displayName, {}}, size_t(quota));
-    if (created.quotaFull)
+    // The quota is the person's, not the replica's: sessions they hold on other replicas count.
+    const size_t elsewhere = quota > 0 ? sessionsElsewhere(service, who) : 0;
+    SessionManager::Created created;
+    if (quota > 0 && elsewhere >= size_t(quota)) created.quotaFull = true;
+    else created = service.sessions->create({}, SessionOwnership{who.owner(), who.displayName, {}}, size_t(quota) - elsewhere);
+    if (created.quotaFull) {
+      const size_t used = created.ownerSessions + elsewhere;
       return sendQuotaExceeded(
-          res, "sessions", uint64_t(quota), created.ownerSessions,
-          "you have " + std::to_string(created.ownerSessions) + " sessions, the most one person may have (--quota-sessions " +
+          res, "sessions", uint64_t(quota), used,
+          "you have " + std::to_string(used) + " sessions, the most one person may have (--quota-sessions " +
               std::to_string(quota) + "); delete one (DELETE /api/sessions/{id}) or close a tab");
+    }
     if (created.full)
       return sendError(res, 429, "too_many_sessions",
                        "at most " + std::to_string(service.sessions->maxSessions()) + " sessions; delete one first");
@@ -281,7 +314,7 @@ void registerSessionRoutes(httplib::Server& server, Service& service) {
   server.Get("/api/sessions/([^/]+)", [&service](const httplib::Request& req, httplib::Response& res) {
     auto session = sessionOr404(service, req, res, SessionAccess::Read);
     if (!session) return;
-    nlohmann::json body = sessionSummary(*session, requester(req));
+    nlohmann::json body = sessionSummary(*session, requester(req), service.config.replica);
     body["scene"] = session->sceneJson();
     sendJson(res, body);
   });

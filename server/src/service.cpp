@@ -149,6 +149,14 @@ Result<std::unique_ptr<Service>> Service::create(const ServerConfig& config, std
       static_cast<size_t>(config.maxSessions),
       std::chrono::milliseconds(std::chrono::seconds(config.sessionReclaimSec)), service->idPrefix(),
       &service->metrics);
+  if (!config.replica.empty()) {
+    SessionManager* sessions = service->sessions.get();
+    service->directory = std::make_unique<SessionDirectory>(config.dataDir, config.replica,
+                                                            [sessions] { return sessions->list(); });
+    SessionDirectory* directory = service->directory.get();
+    sessions->onChange([directory] { directory->publish(); });
+    directory->start();
+  }
   SessionManager::Created created = service->sessions->create(kDefaultSessionId);
   if (!created.session) {
     return makeError(created.error ? created.error->code : ErrorCode::Internal,
@@ -202,6 +210,7 @@ void Service::beginShutdown() {
   renderSlots.shutdown();
   uploadSlots.shutdown();
   if (uploadMemory) uploadMemory->shutdown();
+  if (directory) directory->stop();  // this replica's sessions leave the class-wide list
   if (sessions) sessions->stopAll();
 }
 

@@ -72,8 +72,10 @@ SessionManager::Created SessionManager::create(const std::string& requestedId, S
     else if (sessions_.size() >= maxSessions_) out.full = true;
     return stopped_ || out.full;
   };
+  bool reclaimedAny = false;
   auto stopReclaimed = [&] {
     for (auto& s : reclaimed) s->stop();
+    reclaimedAny = reclaimedAny || !reclaimed.empty();
     reclaimed.clear();
   };
   bool refusedNow;
@@ -82,11 +84,15 @@ SessionManager::Created SessionManager::create(const std::string& requestedId, S
     refusedNow = refused();
   }
   stopReclaimed();
-  if (refusedNow) return out;
+  if (refusedNow) {
+    if (reclaimedAny) changed();
+    return out;
+  }
   // createView may allocate device memory; not under the lock.
   Result<std::unique_ptr<RenderView>> view = renderer_->createView();
   if (!view) {
     out.error = view.takeError();
+    if (reclaimedAny) changed();
     return out;
   }
   {
@@ -103,6 +109,7 @@ SessionManager::Created SessionManager::create(const std::string& requestedId, S
     }
   }
   stopReclaimed();
+  if (out.session || reclaimedAny) changed();
   return out;
 }
 
@@ -131,6 +138,7 @@ SessionManager::RemoveOutcome SessionManager::remove(const std::string& id) {
   }
   // Outside the lock: joining the render thread may wait for one pass.
   session->stop();
+  changed();
   return RemoveOutcome::Removed;
 }
 

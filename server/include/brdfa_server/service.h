@@ -21,6 +21,7 @@
 #include "brdfa_server/jobs.h"
 #include "brdfa_server/metrics.h"
 #include "brdfa_server/scene_json.h"
+#include "brdfa_server/session_directory.h"
 #include "brdfa_server/session_manager.h"
 #include "brdfa_server/static_files.h"
 
@@ -128,6 +129,9 @@ struct Service {
   uint64_t memoryBudgetBytes = 0;  // --max-memory, or half the RAM
   std::unique_ptr<AssetStore> assets;  // uploads and Blender worlds, registered with the renderer
   std::unique_ptr<SessionManager> sessions;
+  // With --replica: the sessions of every replica on this data folder (after `sessions`, so it
+  // stops first).
+  std::unique_ptr<SessionDirectory> directory;
   std::unique_ptr<JobManager> jobs;  // batch tests; its workers stop in beginShutdown
   HotLoader hotLoader;               // --hot-load; stops in beginShutdown
   StaticFiles staticFiles;           // <root>/web, cached per file version with a gzip copy

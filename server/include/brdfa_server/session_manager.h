@@ -2,6 +2,7 @@
 #pragma once
 
 #include <chrono>
+#include <functional>
 #include <map>
 #include <memory>
 #include <mutex>
@@ -53,6 +54,10 @@ class SessionManager {
 
   size_t maxSessions() const { return maxSessions_; }
 
+  // `fn` runs after every create, reclaim and remove, outside the manager's lock (set once,
+  // before serving): the replica's session directory republishes from it.
+  void onChange(std::function<void()> fn) { onChange_ = std::move(fn); }
+
  private:
   std::string randomId();
 
@@ -69,6 +74,10 @@ class SessionManager {
   mutable std::mutex mutex_;
   std::map<std::string, std::shared_ptr<Session>> sessions_;
   bool stopped_ = false;
+  std::function<void()> onChange_;
+  void changed() const {
+    if (onChange_) onChange_();
+  }
 };
 
 }  // namespace brdfa::server
