@@ -1,4 +1,4 @@
-// The deployed topology, for real (issue 14): three brdfa-server replicas on loopback ports with
+// The deployed topology, for real: three brdfa-server replicas on loopback ports with
 // one shared data folder, Debian's HAProxy in front, configured by
 // deploy/haproxy/make-haproxy-cfg.sh. Through the balancer's port it creates six sessions,
 // streams from each and patches each; checks that every request reached the replica whose tag
@@ -9,12 +9,11 @@
 //
 //   node tests/deploy/topology.mjs --server build/server/brdfa-server --root .
 // Exit 77 (skipped) when haproxy is not installed.
-import { spawn, execFileSync } from 'node:child_process';
-import { mkdtempSync, rmSync, writeFileSync, existsSync } from 'node:fs';
-import { createServer } from 'node:net';
-import { tmpdir } from 'node:os';
+import { readFileSync } from 'node:fs';
 import { join, resolve } from 'node:path';
+import { execFileSync } from 'node:child_process';
 import { createRequire } from 'node:module';
+import { haproxyBinary, makeChecks, makeCluster, sleep, smallScene as scene, waitFor } from './cluster.mjs';
 
 const args = Object.fromEntries(
   process.argv.slice(2).reduce((acc, a, i, all) => (a.startsWith('--') ? [...acc, [a.slice(2), all[i + 1]]] : acc), []),
@@ -24,112 +23,15 @@ const serverBinary = resolve(args.server ?? join(root, 'build/server/brdfa-serve
 const require = createRequire(join(root, 'web/package.json'));
 const parsePrometheus = require('parse-prometheus-text-format');
 
-const haproxy = ['/usr/sbin/haproxy', '/usr/bin/haproxy'].find((p) => existsSync(p));
-if (!haproxy) {
+if (!haproxyBinary) {
   console.log('haproxy is not installed (docker/install-deps.sh installs it): skipped');
   process.exit(77);
 }
 
-const sleep = (ms) => new Promise((r) => setTimeout(r, ms));
-let failures = 0;
-function check(ok, what) {
-  console.log(`${ok ? 'ok  ' : 'FAIL'} ${what}`);
-  if (!ok) failures += 1;
-  return ok;
-}
-
-const dataDir = mkdtempSync(join(tmpdir(), 'brdfa-topology-'));
-const children = [];
-function startProcess(name, cmd, argv) {
-  const proc = spawn(cmd, argv, { stdio: ['ignore', 'pipe', 'pipe'] });
-  const entry = { name, proc, log: '', exited: null };
-  const keep = (d) => { entry.log = (entry.log + d).slice(-200000); };
-  proc.stdout.on('data', keep);
-  proc.stderr.on('data', keep);
-  proc.on('exit', (code, signal) => { entry.exited = { code, signal }; });
-  children.push(entry);
-  return entry;
-}
-
-async function startReplica(tag) {
-  const r = startProcess(tag, serverBinary, [
-    '--port', '0', '--root', root, '--data-dir', dataDir, '--replica', tag, '--drain-seconds', '4',
-    '--idle-timeout', '60', '--max-memory', '2048',
-  ]);
-  for (let i = 0; i < 600; i++) {
-    const m = r.log.match(/listening on (http:\/\/\S+)/);
-    if (m) { r.url = m[1]; return r; }
-    if (r.exited) break;
-    await sleep(50);
-  }
-  throw new Error(`replica ${tag} did not start:\n${r.log}`);
-}
-
-function freePort() {
-  return new Promise((res, rej) => {
-    const s = createServer();
-    s.once('error', rej);
-    s.listen(0, '127.0.0.1', () => { const { port } = s.address(); s.close(() => res(port)); });
-  });
-}
-
-// One request, logged with the replica that answered. `expect`: the replica it must reach.
-const requestLog = [];
-async function call(base, method, path, { json, text, expect, label } = {}) {
-  const init = { method, headers: {} };
-  if (json !== undefined) { init.body = JSON.stringify(json); init.headers['content-type'] = 'application/json'; }
-  if (text !== undefined) { init.body = text; init.headers['content-type'] = 'text/plain'; }
-  const res = await fetch(base + path, init);
-  const body = await res.text();
-  const replica = res.headers.get('x-brdfa-replica') ?? '(balancer)';
-  const line = `${method.padEnd(6)} ${path.padEnd(58)} -> ${res.status} served by ${replica}` +
-    (expect ? ` (expected ${expect})` : '');
-  console.log(`  ${line}`);
-  requestLog.push(line);
-  if (expect) check(replica === expect, `${label ?? `${method} ${path}`} reached its session's replica ${expect}`);
-  let parsed = null;
-  try { parsed = JSON.parse(body); } catch { /* not JSON */ }
-  return { status: res.status, replica, body, json: parsed };
-}
-
-// Reads a multipart PNG stream until `frames` parts arrived or `ms` passed; resolves with the
-// count and the replica that served it. The stream stays open until stop() is called.
-function openStream(base, id) {
-  const controller = new AbortController();
-  const state = { frames: 0, replica: null, status: 0, ended: false };
-  const marker = Buffer.from('Content-Type: image/png');
-  state.done = (async () => {
-    try {
-      const res = await fetch(`${base}/api/sessions/${id}/stream`, { signal: controller.signal });
-      state.status = res.status;
-      state.replica = res.headers.get('x-brdfa-replica');
-      const reader = res.body.getReader();
-      let tail = Buffer.alloc(0);
-      for (;;) {
-        const { value, done } = await reader.read();
-        if (done) break;
-        const chunk = Buffer.concat([tail, Buffer.from(value)]);
-        let at = 0;
-        for (;;) {
-          const i = chunk.indexOf(marker, at);
-          if (i < 0) break;
-          state.frames += 1;
-          at = i + marker.length;
-        }
-        tail = chunk.subarray(Math.max(at, chunk.length - marker.length));
-      }
-    } catch { /* aborted or cut */ }
-    state.ended = true;
-  })();
-  state.stop = () => controller.abort();
-  return state;
-}
-
-async function waitFor(pred, ms, step = 100) {
-  const end = Date.now() + ms;
-  while (Date.now() < end) { if (await pred()) return true; await sleep(step); }
-  return false;
-}
+const checks = makeChecks();
+const { check } = checks;
+const cluster = makeCluster({ root, serverBinary, checks });
+const { call, openStream, requestLog, replicas } = cluster;
 
 const metricsOf = async (url) => {
   const res = await fetch(`${url}/metrics`);
@@ -144,36 +46,17 @@ const value = (families, name, labels = {}) => {
   return Number(m.value ?? m.count);
 };
 
-const scene = (i) => ({
-  environment: { name: 'furnace' },
-  objects: [{ mesh: 'sphere', brdf: 'lambert', params: { Kd: [0.5, 0.5, 0.5] } }],
-  render: { width: 48, height: 48, samples_per_frame: 1, max_samples: 1048576, seed: i },
-});
 
-let exitCode = 1;
-try {
+await cluster.run(async () => {
   const tags = ['r1', 'r2', 'r3'];
-  const replicas = {};
-  for (const t of tags) replicas[t] = await startReplica(t);
-  const lbPort = await freePort();
-  const cfgArgs = ['--bind', `127.0.0.1:${lbPort}`, ...tags.map((t) => `${t}=${new URL(replicas[t].url).host}`)];
-  const cfg = execFileSync(join(root, 'deploy/haproxy/make-haproxy-cfg.sh'), cfgArgs, { encoding: 'utf8' });
-  const cfgPath = join(dataDir, 'haproxy.cfg');
-  writeFileSync(cfgPath, cfg);
-  console.log(`haproxy on 127.0.0.1:${lbPort}; replicas ${tags.map((t) => `${t}=${replicas[t].url}`).join(' ')}`);
-  const lb = startProcess('haproxy', haproxy, ['-db', '-f', cfgPath]);
-  const base = `http://127.0.0.1:${lbPort}`;
-  check(await waitFor(async () => {
-    try { return (await fetch(`${base}/api/ready`)).status === 200; } catch { return false; }
-  }, 15000), 'the balancer answers /api/ready');
-  // Every replica up in the pool before sessions are spread.
-  await sleep(1500);
+  for (const t of tags) await cluster.startReplica(t);
+  const base = await cluster.startBalancer();
+  const lb = cluster.balancer;
 
   // The committed example config is the script's output, so it cannot drift from the rule.
   const example = execFileSync(join(root, 'deploy/haproxy/make-haproxy-cfg.sh'),
     ['--bind', '127.0.0.1:8080', '--gone-file', 'deploy/haproxy/replica-gone.http', 'r1=127.0.0.1:8081',
       'r2=127.0.0.1:8082', 'r3=127.0.0.1:8083'], { encoding: 'utf8' });
-  const { readFileSync } = await import('node:fs');
   check(readFileSync(join(root, 'deploy/haproxy/haproxy.cfg'), 'utf8') === example,
     'deploy/haproxy/haproxy.cfg is what make-haproxy-cfg.sh writes');
 
@@ -339,19 +222,4 @@ try {
 
   console.log('\n-- balancer log (replica = backend/server)');
   console.log(lb.log.split('\n').filter((l) => l.includes('brdfa')).slice(-12).join('\n'));
-  exitCode = failures === 0 ? 0 : 1;
-  console.log(`\n${requestLog.length} requests logged; ${failures} failed check(s)`);
-} catch (e) {
-  console.log(`FAIL ${e.stack}`);
-  exitCode = 1;
-} finally {
-  for (const c of children) if (c.exited === null) c.proc.kill('SIGTERM');
-  await sleep(300);
-  for (const c of children) {
-    if (c.exited === null) await waitFor(() => c.exited !== null, 8000);
-    if (c.exited === null) c.proc.kill('SIGKILL');
-    if (exitCode !== 0) console.log(`---- ${c.name} log tail ----\n${c.log.slice(-3000)}`);
-  }
-  rmSync(dataDir, { recursive: true, force: true });
-}
-process.exit(exitCode);
+});
