@@ -4,10 +4,12 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <cerrno>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
 
+#include "brdfa_server/atomic_file.h"
 #include "brdfa_server/auth_crypto.h"
 
 namespace brdfa::server {
@@ -48,15 +50,23 @@ Result<std::string> adminToken(const ServerConfig& config, std::vector<std::stri
   std::error_code ec;
   fs::create_directories(path.parent_path(), ec);
   const std::string fresh = "brdfa_admin_" + randomBase64Url(32);
-  int fd = ::open(path.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0600);
-  if (fd >= 0) {
-    const std::string line = fresh + "\n";
-    const bool ok = ::write(fd, line.data(), line.size()) == ssize_t(line.size()) && ::fsync(fd) == 0;
-    ::close(fd);
-    if (!ok) return makeError(ErrorCode::Internal, "cannot write the admin token file " + path.string());
+  // Written whole under a private name, then linked into place: a replica starting in the same
+  // instant either wins the link or reads a complete file, never an empty one.
+  const fs::path temp = path.parent_path() / (std::string(kTempPrefix) + "admin-token." + randomLowerAlnum(12));
+  int fd = ::open(temp.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0600);
+  if (fd < 0) return makeError(ErrorCode::Internal, "cannot write the admin token file " + path.string());
+  const std::string line = fresh + "\n";
+  const bool written = ::write(fd, line.data(), line.size()) == ssize_t(line.size()) && ::fsync(fd) == 0;
+  ::close(fd);
+  const bool linked = written && ::link(temp.c_str(), path.c_str()) == 0;
+  const int linkError = errno;
+  ::unlink(temp.c_str());
+  if (linked) {
     log.push_back("auth: made the teacher's token in " + path.string() + " (read it there; it is not logged)");
     return fresh;
   }
+  if (!written || linkError != EEXIST)
+    return makeError(ErrorCode::Internal, "cannot write the admin token file " + path.string());
   log.push_back("auth: the teacher's token is in " + path.string());
   return readToken(path.string());
 }
