@@ -26,6 +26,11 @@ UserStore* tokenStore(Service& service, httplib::Response& res) {
   return nullptr;
 }
 
+// The store a teacher-only token route works on; null after a 403 (not the teacher) or a 400.
+UserStore* teachersTokenStore(Service& service, const httplib::Request& req, httplib::Response& res) {
+  return requireTeacher(req, res) ? tokenStore(service, res) : nullptr;
+}
+
 void sendStoreError(httplib::Response& res, const Error& error) {
   sendError(res, 500, "storage_error", error.message);
 }
@@ -81,8 +86,7 @@ void registerSelfRoutes(httplib::Server& server, Service& service) {
 
 void registerJoinCodeRoutes(httplib::Server& server, Service& service) {
   server.Post("/api/auth/join-codes", [&service](const httplib::Request& req, httplib::Response& res) {
-    if (!requireTeacher(req, res)) return;
-    UserStore* users = tokenStore(service, res);
+    UserStore* users = teachersTokenStore(service, req, res);
     if (!users) return;
     int minutes = kDefaultJoinCodeMinutes;
     if (!req.body.empty()) {
@@ -105,8 +109,7 @@ void registerJoinCodeRoutes(httplib::Server& server, Service& service) {
   });
 
   server.Get("/api/auth/join-codes", [&service](const httplib::Request& req, httplib::Response& res) {
-    if (!requireTeacher(req, res)) return;
-    UserStore* users = tokenStore(service, res);
+    UserStore* users = teachersTokenStore(service, req, res);
     if (!users) return;
     nlohmann::json out = nlohmann::json::array();
     for (const JoinCodeInfo& c : users->listJoinCodes())
@@ -115,8 +118,7 @@ void registerJoinCodeRoutes(httplib::Server& server, Service& service) {
   });
 
   server.Delete("/api/auth/join-codes/([^/]+)", [&service](const httplib::Request& req, httplib::Response& res) {
-    if (!requireTeacher(req, res)) return;
-    UserStore* users = tokenStore(service, res);
+    UserStore* users = teachersTokenStore(service, req, res);
     if (!users) return;
     Result<bool> revoked = users->revokeJoinCode(std::string(req.matches[1]));
     if (!revoked) return sendStoreError(res, revoked.error());
@@ -127,8 +129,7 @@ void registerJoinCodeRoutes(httplib::Server& server, Service& service) {
 
 void registerUserRoutes(httplib::Server& server, Service& service) {
   server.Get("/api/auth/users", [&service](const httplib::Request& req, httplib::Response& res) {
-    if (!requireTeacher(req, res)) return;
-    UserStore* users = tokenStore(service, res);
+    UserStore* users = teachersTokenStore(service, req, res);
     if (!users) return;
     const std::vector<TokenInfo> tokens = users->listTokens();
     nlohmann::json out = nlohmann::json::array();
@@ -143,8 +144,7 @@ void registerUserRoutes(httplib::Server& server, Service& service) {
   });
 
   server.Post("/api/auth/users", [&service](const httplib::Request& req, httplib::Response& res) {
-    if (!requireTeacher(req, res)) return;
-    UserStore* users = tokenStore(service, res);
+    UserStore* users = teachersTokenStore(service, req, res);
     if (!users) return;
     auto body = readJsonBody(req, res);
     if (!body) return;
@@ -182,8 +182,7 @@ void registerUserRoutes(httplib::Server& server, Service& service) {
   });
 
   server.Post("/api/auth/users/([^/]+)/tokens", [&service](const httplib::Request& req, httplib::Response& res) {
-    if (!requireTeacher(req, res)) return;
-    UserStore* users = tokenStore(service, res);
+    UserStore* users = teachersTokenStore(service, req, res);
     if (!users) return;
     const std::string user = req.matches[1];
     if (!users->findUser(user)) return sendError(res, 404, "not_found", "no user '" + user + "'", "user");
@@ -194,8 +193,7 @@ void registerUserRoutes(httplib::Server& server, Service& service) {
 
   server.Delete("/api/auth/users/([^/]+)/tokens/([^/]+)", [&service](const httplib::Request& req,
                                                                     httplib::Response& res) {
-    if (!requireTeacher(req, res)) return;
-    UserStore* users = tokenStore(service, res);
+    UserStore* users = teachersTokenStore(service, req, res);
     if (!users) return;
     Result<bool> revoked = users->revokeToken(std::string(req.matches[1]), std::string(req.matches[2]));
     if (!revoked) return sendStoreError(res, revoked.error());
@@ -204,8 +202,7 @@ void registerUserRoutes(httplib::Server& server, Service& service) {
   });
 
   server.Delete("/api/auth/users/([^/]+)", [&service](const httplib::Request& req, httplib::Response& res) {
-    if (!requireTeacher(req, res)) return;
-    UserStore* users = tokenStore(service, res);
+    UserStore* users = teachersTokenStore(service, req, res);
     if (!users) return;
     Result<bool> removed = users->removeUser(std::string(req.matches[1]));
     if (!removed) return sendStoreError(res, removed.error());
