@@ -508,26 +508,8 @@ struct Spawned {
     std::vector<std::string> args = {BRDFA_SERVER_BINARY, "--port", "0", "--root", BRDFA_SOURCE_DIR,
                                      "--data-dir", dir + "/data", "--idle-timeout", "3"};
     args.insert(args.end(), flags.begin(), flags.end());
-    int out[2];
-    if (::pipe(out) != 0) return false;
-    pid = ::fork();
-    if (pid < 0) return false;
-    if (pid == 0) {
-      ::unsetenv("BRDFA_ADMIN_TOKEN");
-      ::dup2(out[1], STDOUT_FILENO);
-      int log = ::open(logPath.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-      if (log >= 0) ::dup2(log, STDERR_FILENO);
-      ::close(out[0]);
-      ::close(out[1]);
-      std::vector<char*> argv;
-      for (auto& a : args) argv.push_back(a.data());
-      argv.push_back(nullptr);
-      ::execv(argv[0], argv.data());
-      ::_exit(127);
-    }
-    ::close(out[1]);
-    outFd = out[0];
-    return true;
+    pid = brdfa::testsupport::spawnLogged(std::move(args), logPath, outFd, {"BRDFA_ADMIN_TOKEN"});
+    return pid > 0;
   }
   // The exit status once it exits within `timeout`; -1 if it is still running then.
   int waitExit(std::chrono::seconds timeout) {
@@ -714,6 +696,14 @@ TEST_F(AuthMatrix, EveryRouteForOwnerOtherStudentTeacherAndNobody) {
     };
   };
   int counter = 0;
+  // A preset of alice's to delete: a fresh one for those who may, her p1 for the others.
+  auto freshPreset = [&](Who w) -> Vars {
+    if (w == kOther || w == kAnon) return {{"X", v["P"]}};
+    const std::string name = "pdel" + std::to_string(++counter);
+    Reply r = s.call(A, "PUT", "/api/brdfs/alice/m1/presets/" + name, "{}");
+    EXPECT_EQ(r.status, 201) << r;
+    return {{"X", name}};
+  };
   // A created thing is deleted again by whoever made it.
   auto deleteCreated = [&](const std::string& prefix) {
     return [&s, &tok, prefix](Who w, const Reply& r) {
@@ -788,21 +778,9 @@ TEST_F(AuthMatrix, EveryRouteForOwnerOtherStudentTeacherAndNobody) {
       {"GET", "/api/brdfs/{B}/presets/{P}?owner=alice", "", {{}, c404, ok200, c401}, {"B"}},
       {"PUT", "/api/brdfs/{B}/presets/p2", "{}", {c201, c404, c201, c401}, {"B"}},
       {"DELETE", "/api/brdfs/{B}/presets/{X}", "", {c204, c404, c404, c401}, {"X=nopreset"}, "application/json",
-       Row::Plain, [&](Who w) -> Vars {
-         if (w == kOther || w == kAnon) return {{"X", v["P"]}};
-         const std::string name = "pdel" + std::to_string(++counter);
-         Reply r = s.call(A, "PUT", "/api/brdfs/alice/m1/presets/" + name, "{}");
-         EXPECT_EQ(r.status, 201) << r;
-         return {{"X", name}};
-       }},
+       Row::Plain, freshPreset},
       {"DELETE", "/api/brdfs/{B}/presets/{X}?owner=alice", "", {{}, c404, c204, c401}, {"B"}, "application/json",
-       Row::Plain, [&](Who w) -> Vars {
-         if (w == kOther || w == kAnon) return {{"X", v["P"]}};
-         const std::string name = "pdel" + std::to_string(++counter);
-         Reply r = s.call(A, "PUT", "/api/brdfs/alice/m1/presets/" + name, "{}");
-         EXPECT_EQ(r.status, 201) << r;
-         return {{"X", name}};
-       }},
+       Row::Plain, freshPreset},
       {"GET", "/api/brdfs/ggx/presets", "", {ok200, ok200, ok200, c401}},
       {"GET", "/api/brdfs/ggx/presets/{PA}", "", {ok200, c404, c404, c401}, {"PA"}},
       {"GET", "/api/brdfs/ggx/presets/{PA}?owner=alice", "", {{}, {}, ok200, c401}},

@@ -106,22 +106,18 @@ const bool kIgnoreSigpipe = [] {
 }();
 }  // namespace
 
-std::string ServerProcess::start(const std::string& binary, const std::string& root,
-                                 const std::vector<std::string>& extraArgs) {
-  char tmpl[] = "/tmp/brdfa-itest-XXXXXX";
-  if (!::mkdtemp(tmpl)) return "mkdtemp failed";
-  tmpDir_ = tmpl;
-  std::string dataDir = tmpDir_ + "/data";
-  std::string logPath = tmpDir_ + "/server.log";
-
-  std::vector<std::string> args = {binary, "--port", "0", "--root", root, "--data-dir", dataDir};
-  args.insert(args.end(), extraArgs.begin(), extraArgs.end());
-
+pid_t spawnLogged(std::vector<std::string> args, const std::string& logPath, int& outFd,
+                  const std::vector<std::string>& unsetEnv) {
   int out[2];
-  if (::pipe(out) != 0) return "pipe failed";
+  if (::pipe(out) != 0) return -1;
   pid_t pid = ::fork();
-  if (pid < 0) return "fork failed";
+  if (pid < 0) {
+    ::close(out[0]);
+    ::close(out[1]);
+    return -1;
+  }
   if (pid == 0) {
+    for (const std::string& name : unsetEnv) ::unsetenv(name.c_str());
     ::dup2(out[1], STDOUT_FILENO);
     int log = ::open(logPath.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
     if (log >= 0) ::dup2(log, STDERR_FILENO);
@@ -134,8 +130,26 @@ std::string ServerProcess::start(const std::string& binary, const std::string& r
     ::_exit(127);
   }
   ::close(out[1]);
+  outFd = out[0];
+  return pid;
+}
+
+std::string ServerProcess::start(const std::string& binary, const std::string& root,
+                                 const std::vector<std::string>& extraArgs) {
+  char tmpl[] = "/tmp/brdfa-itest-XXXXXX";
+  if (!::mkdtemp(tmpl)) return "mkdtemp failed";
+  tmpDir_ = tmpl;
+  std::string dataDir = tmpDir_ + "/data";
+  std::string logPath = tmpDir_ + "/server.log";
+
+  std::vector<std::string> args = {binary, "--port", "0", "--root", root, "--data-dir", dataDir};
+  args.insert(args.end(), extraArgs.begin(), extraArgs.end());
+
+  int outFd = -1;
+  pid_t pid = spawnLogged(std::move(args), logPath, outFd);
+  if (pid < 0) return "fork failed";
   pid_ = pid;
-  stdoutFd_ = out[0];
+  stdoutFd_ = outFd;
 
   std::string line;
   if (!readLine(stdoutFd_, line, std::chrono::seconds(60)))

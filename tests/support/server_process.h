@@ -14,6 +14,12 @@
 
 namespace brdfa::testsupport {
 
+// Forks and runs `args` (args[0]: the binary), its stdout into a pipe whose read end goes to
+// `outFd`, its stderr into `logPath`, without the environment variables in `unsetEnv`. The
+// child's pid, or -1 when it could not be started.
+pid_t spawnLogged(std::vector<std::string> args, const std::string& logPath, int& outFd,
+                  const std::vector<std::string>& unsetEnv = {});
+
 class ServerProcess {
  public:
   ServerProcess() = default;
