@@ -17,7 +17,7 @@ import { tmpdir } from 'node:os';
 import { join, resolve } from 'node:path';
 import { execFileSync } from 'node:child_process';
 import { randomBytes } from 'node:crypto';
-import { startServer } from './server.mjs';
+import { reportAndExit, startServer } from './server.mjs';
 import { waitForFrame } from './frames.mjs';
 
 const CHROMIUM = process.env.BRDFA_CHROMIUM || '/usr/bin/chromium';
@@ -644,12 +644,7 @@ async function main() {
   } finally {
     await browser.close();
   }
-  if (failed) {
-    console.log(`server log (tail):\n${server.stderr().slice(-3000)}`);
-    console.log(`${failed} check(s) failed; screenshots in ${opt.artifacts}`);
-    process.exit(1);
-  }
-  console.log(`all checks passed; screenshots in ${opt.artifacts}`);
+  reportAndExit(failed, server, opt.artifacts);
 }
 
 main().catch((e) => { console.error(e); process.exit(1); });

@@ -8,7 +8,7 @@ import { existsSync, mkdirSync } from 'node:fs';
 import { createRequire } from 'node:module';
 import { join, resolve } from 'node:path';
 import { execFileSync } from 'node:child_process';
-import { startServer } from './server.mjs';
+import { reportAndExit, startServer } from './server.mjs';
 import { grab, variance, meanDiff, waitForFrame } from './frames.mjs';
 import { checks } from './checks.mjs';
 import { layoutChecks } from './layout.mjs';
@@ -69,12 +69,7 @@ async function main() {
     await browser.close();
     await server.stop();
   }
-  if (failed) {
-    console.log(`server log (tail):\n${server.stderr().slice(-3000)}`);
-    console.log(`${failed} check(s) failed; screenshots in ${opt.artifacts}`);
-    process.exit(1);
-  }
-  console.log(`all checks passed; screenshots in ${opt.artifacts}`);
+  reportAndExit(failed, server, opt.artifacts);
 }
 
 main().catch((e) => { console.error(e); process.exit(1); });

@@ -37,3 +37,13 @@ export async function startServer(binary, root, { args = [] } = {}) {
     },
   };
 }
+
+// The end of a browser test: the server's log tail and exit 1 when `failed` checks failed.
+export function reportAndExit(failed, server, artifacts) {
+  if (failed) {
+    console.log(`server log (tail):\n${server.stderr().slice(-3000)}`);
+    console.log(`${failed} check(s) failed; screenshots in ${artifacts}`);
+    process.exit(1);
+  }
+  console.log(`all checks passed; screenshots in ${artifacts}`);
+}
