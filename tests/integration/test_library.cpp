@@ -311,8 +311,9 @@ TEST(Library, StartupTimeDoesNotGrowWithSavedBrdfs) {
   std::fprintf(stderr, "start-up: %.0f ms empty, %.0f ms with 400 saved BRDFs\n", emptyMs, fullMs);
   // Parsing 400 files is allowed 150 ms (compiling them would take seconds). The sanitizer
   // build's instrumented parser takes 1-3 ms a file: the bound is checked in the plain build.
-  if (!kSanitizedBuild)
+  if (!kSanitizedBuild) {
     EXPECT_LE(fullMs, emptyMs * 1.2 + 150.0) << "empty " << emptyMs << " ms, 400 BRDFs " << fullMs << " ms";
+  }
 }
 
 TEST(Library, SigtermDuringABatchJobExitsCleanly) {
