@@ -15,6 +15,7 @@
 
 #include <algorithm>
 #include <array>
+#include <atomic>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -1542,6 +1543,59 @@ TEST_F(AuthQuotas, OneShotRendersAndAnalyses) {
     std::this_thread::sleep_for(std::chrono::milliseconds(100));
   }
   EXPECT_EQ(freed.status, 200) << "alice's room came back when her render stopped: " << freed;
+}
+
+// A dozen requests of one student in flight together race for the last slots of each quota: exactly the
+// quota's worth succeed, the rest are 429, and a classmate racing beside them is not affected.
+TEST_F(AuthQuotas, RacingRequestsNeverPassAQuota) {
+  TestServer& s = *srv_;
+  const std::string a = s.newStudent("qx-alice"), b = s.newStudent("qx-bob");
+  constexpr int kRacers = 12;
+  // Runs attempt(i) for alice's kRacers and bob's one, released together once every thread is
+  // ready; alice's statuses and bob's.
+  auto race = [&](std::function<Reply(const std::string&, int)> attempt) {
+    std::vector<int> statuses(kRacers + 1, 0);
+    std::vector<std::thread> threads;
+    std::atomic<int> ready{0};
+    for (int i = 0; i <= kRacers; ++i)
+      threads.emplace_back([&, i] {
+        ready.fetch_add(1);
+        while (ready.load() <= kRacers) std::this_thread::yield();
+        statuses[i] = attempt(i < kRacers ? a : b, i).status;
+      });
+    for (std::thread& t : threads) t.join();
+    const int bob = statuses.back();
+    statuses.pop_back();
+    return std::make_pair(statuses, bob);
+  };
+  auto count = [](const std::vector<int>& v, int status) { return int(std::count(v.begin(), v.end(), status)); };
+
+  auto [sessions, bobSession] = race([&](const std::string& who, int) { return s.post(who, "/api/sessions", tinyScene()); });
+  EXPECT_EQ(count(sessions, 201), 2) << "sessions made at once past --quota-sessions 2";
+  EXPECT_EQ(count(sessions, 429), kRacers - 2);
+  EXPECT_EQ(bobSession, 201);
+  EXPECT_EQ(s.sessionIds(a).size() - s.sessionIds(a).count("default"), 2u);
+
+  auto [brdfs, bobBrdf] = race([&](const std::string& who, int i) {
+    const std::string name = (who == a ? "qx-alice/m" : "qx-bob/m") + std::to_string(i);
+    return s.call(who, "PUT", "/api/brdfs/" + name, kLambertWhite, "text/plain");
+  });
+  EXPECT_EQ(count(brdfs, 201), 3) << "BRDFs saved at once past --quota-brdfs 3";
+  EXPECT_EQ(count(brdfs, 429), kRacers - 3);
+  EXPECT_EQ(bobBrdf, 201);
+  int saved = 0;
+  for (const json& e : s.get(a, "/api/brdfs").j()) saved += jv(e, "owner", "") == "qx-alice";
+  EXPECT_EQ(saved, 3) << "alice's library holds more than her quota";
+
+  auto [uploads, bobUpload] = race([&](const std::string& who, int i) {
+    return s.upload(who, smallPng(), std::to_string(i) + ".png");
+  });
+  EXPECT_EQ(count(uploads, 201), 2) << "uploads at once past --quota-uploads 2";
+  EXPECT_EQ(count(uploads, 429), kRacers - 2);
+  EXPECT_EQ(bobUpload, 201);
+  int kept = 0;
+  for (const json& asset : s.get(a, "/api/assets").j()) kept += jv(asset, "owner", "") == "qx-alice";
+  EXPECT_EQ(kept, 2) << "alice keeps more uploads than her quota";
 }
 
 // ---- Modes -----------------------------------------------------------------------------------
