@@ -318,11 +318,12 @@ BrdfLibrary::PutOutcome BrdfLibrary::putUser(std::string name, std::string sourc
   if (maxEntries > 0) refreshUserDir();  // the count below is of what the folder holds now
   std::lock_guard store(storeMutex_);
   bool shared = false;
+  bool exists = false;
   {
     std::lock_guard lock(mutex_);
     auto it = entries_.find(name);
     if (it != entries_.end() && it->second->builtin) return PutOutcome::BuiltinConflict;
-    const bool exists = it != entries_.end() || broken_.count(name);
+    exists = it != entries_.end() || broken_.count(name);
     shared = it != entries_.end() ? it->second->shared : exists && broken_.find(name)->second.shared;
     if (maxEntries > 0 && !exists) {
       size_t n = broken_.size();
@@ -346,8 +347,9 @@ BrdfLibrary::PutOutcome BrdfLibrary::putUser(std::string name, std::string sourc
   entry->owner = owner_;
   entry->shared = shared;
   std::lock_guard lock(mutex_);
-  auto it = entries_.find(name);
-  PutOutcome outcome = it == entries_.end() && !broken_.count(name) ? PutOutcome::Created : PutOutcome::Replaced;
+  // Decided before the write: a rescan by another request (refreshUserDir takes no store lock)
+  // may have loaded the file just written, which does not make this save a replacement.
+  const PutOutcome outcome = exists ? PutOutcome::Replaced : PutOutcome::Created;
   broken_.erase(name);
   if (stored) *stored = entry;
   entries_[std::move(name)] = std::move(entry);
