@@ -3,6 +3,7 @@
 // request messages on stdin and writes replies on stdout (render_wire.h); each request runs on
 // a thread of its own, as the renderer's API is thread-safe, so a long pass of one view never
 // holds another's request. Exits at end of input (the server went away).
+#include <pthread.h>
 #include <sys/prctl.h>
 #include <signal.h>
 #include <unistd.h>
@@ -41,7 +42,10 @@ class Worker {
   Worker(int channel, std::shared_ptr<Renderer> renderer) : channel_(channel), renderer_(std::move(renderer)) {}
 
   void serve(const RendererOptions& options) {
-    std::thread([this, options] { watch(options); }).detach();
+    std::thread([this, options] {
+      ::pthread_setname_np(::pthread_self(), "worker-watch");
+      watch(options);
+    }).detach();
     for (;;) {
       std::string frame;
       if (!compile_protocol::readFrame(channel_, frame, kMaxRequestBytes)) return;
@@ -58,13 +62,17 @@ class Worker {
   // loops on two cores, a slider change's frame took ~40 ms longer with a thread per request.
   void dispatch(wire::Message request) {
     std::lock_guard lock(poolMutex_);
-    queue_.push_back(std::move(request));
+    queue_.push_back(Queued{std::move(request), std::chrono::steady_clock::now()});
     if (idle_ > 0) {
       --idle_;
       ++wakeTokens_;
       poolWake_.notify_one();
     } else {
-      std::thread([this] { serveQueue(); }).detach();
+      std::thread([this] {
+        // Named for top, perf and the bench's CPU breakdown (lavapipe's own are llvmpipe-N).
+        ::pthread_setname_np(::pthread_self(), "worker-request");
+        serveQueue();
+      }).detach();
     }
   }
 
@@ -74,10 +82,12 @@ class Worker {
     std::unique_lock lock(poolMutex_);
     for (;;) {
       if (!queue_.empty()) {
-        wire::Message request = std::move(queue_.front());
+        Queued queued = std::move(queue_.front());
         queue_.pop_front();
         lock.unlock();
-        handle(request);
+        timing_.received = queued.received;
+        timing_.started = std::chrono::steady_clock::now();
+        handle(queued.request);
         lock.lock();
         continue;
       }
@@ -96,6 +106,13 @@ class Worker {
     else
       m.head["error"] = wire::toJson(value.error());
     m.tail = std::move(tail);
+    // Where the request's time went here: waiting for a thread, then served (the server's
+    // channel counters, RendererCounters::channel).
+    const auto now = std::chrono::steady_clock::now();
+    if (timing_.started != std::chrono::steady_clock::time_point{})
+      m.head["worker_us"] = {
+          std::chrono::duration_cast<std::chrono::microseconds>(timing_.started - timing_.received).count(),
+          std::chrono::duration_cast<std::chrono::microseconds>(now - timing_.started).count()};
     const std::string bytes = wire::encode(m);
     std::lock_guard lock(writeMutex_);
     // A failed write means the server is gone; the reader sees end of input and exits.
@@ -279,7 +296,16 @@ class Worker {
   std::shared_ptr<Renderer> renderer_;
   std::mutex poolMutex_;
   std::condition_variable poolWake_;
-  std::deque<wire::Message> queue_;
+  struct Queued {
+    wire::Message request;
+    std::chrono::steady_clock::time_point received;  // read off the channel
+  };
+  std::deque<Queued> queue_;
+  // The request this thread serves: when it was read and when this thread took it.
+  struct Timing {
+    std::chrono::steady_clock::time_point received, started;
+  };
+  static inline thread_local Timing timing_;
   int idle_ = 0;        // threads waiting for a request, not yet woken
   int wakeTokens_ = 0;  // wake-ups handed out and not yet taken
   std::mutex writeMutex_;

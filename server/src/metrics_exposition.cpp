@@ -6,6 +6,37 @@
 
 namespace brdfa::server {
 
+namespace {
+
+// The render worker's channel (empty with --in-process): what crossing the process boundary
+// costs, per operation.
+void addWorkerChannel(PrometheusText& out, const RendererCounters& c) {
+  // Each family's samples in one group, as the text format requires.
+  out.family("brdfa_worker_requests_total", "counter", "Requests answered by the render worker, by operation.");
+  for (const auto& [op, f] : c.channel) out.sample("brdfa_worker_requests_total", double(f.requests), {{"op", op}});
+  out.family("brdfa_worker_bytes_total", "counter",
+             "Bytes through the render worker's channel, by operation and direction (to or from the worker).");
+  for (const auto& [op, f] : c.channel) {
+    out.sample("brdfa_worker_bytes_total", double(f.bytesToWorker), {{"op", op}, {"direction", "to"}});
+    out.sample("brdfa_worker_bytes_total", double(f.bytesFromWorker), {{"op", op}, {"direction", "from"}});
+  }
+  out.family("brdfa_worker_request_seconds_total", "counter",
+             "Time of the render worker's requests, by operation and part: round_trip (written to reply read, "
+             "here), queue (waiting for a worker thread) and serve (served by the worker).");
+  for (const auto& [op, f] : c.channel) {
+    out.sample("brdfa_worker_request_seconds_total", f.roundTripSeconds, {{"op", op}, {"part", "round_trip"}});
+    out.sample("brdfa_worker_request_seconds_total", f.workerQueueSeconds, {{"op", op}, {"part", "queue"}});
+    out.sample("brdfa_worker_request_seconds_total", f.workerServeSeconds, {{"op", op}, {"part", "serve"}});
+  }
+  out.family("brdfa_worker_in_flight_seconds_total", "counter",
+             "Requests in flight to the render worker, integrated over time: its rate is the mean number at once.");
+  out.sample("brdfa_worker_in_flight_seconds_total", c.channelInFlightSeconds);
+  out.family("brdfa_worker_in_flight_max", "gauge", "The most requests in flight to the render worker at once.");
+  out.sample("brdfa_worker_in_flight_max", double(c.channelMaxInFlight));
+}
+
+}  // namespace
+
 std::string metricsText(const Service& service) {
   const RendererCounters c = service.renderer->counters();
   const uint64_t uploads = service.uploadMemory ? service.uploadMemory->taken() : 0;
@@ -44,6 +75,7 @@ std::string metricsText(const Service& service) {
   out.family("brdfa_render_worker_restarts_total", "counter",
              "Render workers killed and replaced (a pass, build or check past its budget).");
   out.sample("brdfa_render_worker_restarts_total", static_cast<double>(c.workerRestarts));
+  addWorkerChannel(out, c);
 
   out.family("brdfa_rejections_total", "counter",
              "Requests answered with an error (HTTP status >= 400), by the error name of the JSON body.");

@@ -1,5 +1,7 @@
 #include "brdfa_server/session.h"
 
+#include <pthread.h>
+
 #include <algorithm>
 #include <cstdio>
 
@@ -12,13 +14,23 @@ namespace {
 // A running mean of a frame step's time (ms) that follows changes within a few frames; the
 // first measurement starts it.
 void addToRunningMean(double& mean, double ms) { mean = mean > 0 ? 0.8 * mean + 0.2 * ms : ms; }
+
+// Names the calling thread (at most 15 characters) so that top, perf and the bench's CPU
+// breakdown tell a session's threads from the HTTP server's.
+void nameThisThread(const char* name) { ::pthread_setname_np(::pthread_self(), name); }
 }  // namespace
 
 Session::Session(std::string id, std::unique_ptr<RenderView> view, std::chrono::milliseconds idleTimeout,
                  ServiceMetrics* metrics, SessionOwnership ownership)
     : id_(std::move(id)), ownership_(std::move(ownership)), view_(std::move(view)), idleTimeout_(idleTimeout), metrics_(metrics) {
-  thread_ = std::thread([this] { guarded(&Session::renderLoop); });
-  encoder_ = std::thread([this] { guarded(&Session::encodeLoop); });
+  thread_ = std::thread([this] {
+    nameThisThread("brdfa-render");
+    guarded(&Session::renderLoop);
+  });
+  encoder_ = std::thread([this] {
+    nameThisThread("brdfa-encode");
+    guarded(&Session::encodeLoop);
+  });
 }
 
 Session::~Session() { stop(); }

@@ -8,6 +8,8 @@
 #include <filesystem>
 #include <fstream>
 #include <iterator>
+#include <map>
+#include <sstream>
 #include <thread>
 
 #include "server_fixture.h"
@@ -270,6 +272,52 @@ TEST(Lifecycle, DefaultSessionHasItsSceneForConcurrentFirstRequests) {
     EXPECT_EQ(brdfs[i], "ggx") << "client " << i;
   }
   EXPECT_EQ(server.terminate(), 0);
+}
+
+
+TEST_F(Service, WorkerChannelCountersAccountForEveryFrameRead) {
+  constexpr int kSize = 40, kReads = 3;
+  // The render worker's channel figures in /metrics, a name{labels} -> value map.
+  auto workerMetrics = [] {
+    std::map<std::string, double> out;
+    auto r = get("/metrics");
+    if (!r || r->status != 200) return out;
+    std::istringstream lines(r->body);
+    for (std::string line; std::getline(lines, line);)
+      if (line.rfind("brdfa_worker_", 0) == 0) out[line.substr(0, line.rfind(' '))] = std::stod(line.substr(line.rfind(' ') + 1));
+    return out;
+  };
+  const std::string id = createSession(furnaceScene("lambert", json::object(), kSize, 4, 4));
+  ASSERT_FALSE(id.empty());
+  ASSERT_EQ(get("/api/sessions/" + id + "/frame?min_spp=4")->status, 200);  // rendered and idle from here
+  const auto before = workerMetrics();
+  for (int i = 0; i < kReads; ++i) ASSERT_EQ(get("/api/sessions/" + id + "/frame?min_spp=4")->status, 200);
+  const auto after = workerMetrics();
+  auto delta = [&](const std::string& key) {
+    auto a = after.find(key), b = before.find(key);
+    return (a == after.end() ? 0.0 : a->second) - (b == before.end() ? 0.0 : b->second);
+  };
+  // One read back per frame request, and nothing else read frames meanwhile (no stream).
+  EXPECT_EQ(delta(R"(brdfa_worker_requests_total{op="readFrame"})"), kReads);
+  const double pixels = double(kSize) * kSize * 4;
+  const double bytes = delta(R"(brdfa_worker_bytes_total{op="readFrame",direction="from"})");
+  EXPECT_GE(bytes, kReads * pixels) << "each reply carries the RGBA8 frame";
+  EXPECT_LE(bytes, kReads * (pixels + 2048)) << "and a small head";
+  const double rt = delta(R"(brdfa_worker_request_seconds_total{op="readFrame",part="round_trip"})");
+  const double queue = delta(R"(brdfa_worker_request_seconds_total{op="readFrame",part="queue"})");
+  const double serve = delta(R"(brdfa_worker_request_seconds_total{op="readFrame",part="serve"})");
+  EXPECT_GT(serve, 0);
+  EXPECT_GE(queue, 0);
+  EXPECT_GE(rt, queue + serve) << "the worker's part of a round trip is within it";
+  // The in-flight integral is the sum of the requests' times in flight: here every request of
+  // the window (the reads, the first scrape's tail, the second's head) is counted in both.
+  double roundTrips = 0;
+  for (const auto& [key, value] : after)
+    if (key.find("part=\"round_trip\"") != std::string::npos) roundTrips += value - (before.count(key) ? before.at(key) : 0);
+  const double inFlight = delta("brdfa_worker_in_flight_seconds_total");
+  EXPECT_NEAR(inFlight, roundTrips, 0.02 + 0.1 * roundTrips) << "in flight " << inFlight << " s, round trips " << roundTrips << " s";
+  EXPECT_GE(after.at("brdfa_worker_in_flight_max"), 1);
+  EXPECT_EQ(del("/api/sessions/" + id)->status, 204);
 }
 
 }  // namespace

@@ -229,6 +229,23 @@ struct RendererCounters {
   uint64_t workerRestarts = 0;    // isolated renderers: render workers killed and replaced
   uint64_t quarantinedPrograms = 0;  // isolated renderers: programs refused since (see RendererOptions)
 
+  // Isolated renderers: the requests to the render worker since start, per operation
+  // ("renderPass", "readFrame", ...). A request's round trip is the time from its write here to
+  // its reply read here; of that, the worker waited `workerQueueSeconds` for a thread to take it
+  // and took `workerServeSeconds` to serve it. The rest is the channel: copies, the socket, and
+  // the wake-ups of the threads on both ends.
+  struct ChannelOp {
+    uint64_t requests = 0;
+    uint64_t bytesToWorker = 0;
+    uint64_t bytesFromWorker = 0;
+    double roundTripSeconds = 0;
+    double workerQueueSeconds = 0;
+    double workerServeSeconds = 0;
+  };
+  std::map<std::string, ChannelOp> channel;
+  double channelInFlightSeconds = 0;  // requests in flight, integrated over time
+  uint64_t channelMaxInFlight = 0;    // the most in flight at once
+
   // Adds the figures that only ever grow (compiles, cache hits, pipelines) of `other`: an
   // isolated renderer keeps those of the workers it replaced, so they never go back.
   void addCumulative(const RendererCounters& other) {

@@ -1,5 +1,6 @@
 #include "remote_renderer.h"
 
+#include <pthread.h>
 #include <poll.h>
 #include <signal.h>
 #include <unistd.h>
@@ -63,6 +64,9 @@ struct Pending {
   std::condition_variable answered;
   std::optional<Error> blame;  // set when this request caused the replacement
   wire::Message reply;
+  std::string op;           // for the channel counters
+  size_t bytesSent = 0;     // the request's frame
+  bool inFlight = false;    // written, and neither answered nor lost yet
 };
 
 struct Call {
@@ -173,8 +177,15 @@ class RemoteRenderer : public Renderer, public std::enable_shared_from_this<Remo
     if (!started) return started.takeError();
     std::lock_guard lock(mutex_);
     adopt(started.value());
-    watchdog_ = std::thread([this] { watch(); });
-    spareMaker_ = std::thread([this] { keepSpare(); });
+    // Named for top, perf and the bench's CPU breakdown.
+    watchdog_ = std::thread([this] {
+      ::pthread_setname_np(::pthread_self(), "brdfa-watchdog");
+      watch();
+    });
+    spareMaker_ = std::thread([this] {
+      ::pthread_setname_np(::pthread_self(), "brdfa-spare");
+      keepSpare();
+    });
     return {};
   }
 
@@ -264,6 +275,10 @@ class RemoteRenderer : public Renderer, public std::enable_shared_from_this<Remo
     out.addCumulative(retiredCounters_);
     out.workerRestarts = restarts_;
     out.quarantinedPrograms = quarantine_.size();
+    out.channel = channel_;
+    out.channelInFlightSeconds =
+        inFlightSeconds_ + double(inFlight_) * std::chrono::duration<double>(Clock::now() - inFlightSince_).count();
+    out.channelMaxInFlight = maxInFlight_;
     if (!m) out.memory.budget = options_.memoryBudgetBytes;
     return out;
   }
@@ -371,6 +386,7 @@ class RemoteRenderer : public Renderer, public std::enable_shared_from_this<Remo
   // Every request in flight is answered "lost" (mutex_ held): its caller tries again, or stops.
   void loseAllPending() {
     for (auto& [id, p] : pending_) {
+      setInFlightLocked(*p, false);
       p->lost = true;
       p->answered.notify_one();
     }
@@ -397,15 +413,46 @@ class RemoteRenderer : public Renderer, public std::enable_shared_from_this<Remo
     p->names = c.names;
     p->view = c.view;
     c.head["id"] = p->id;
+    p->op = c.head.value("op", std::string());
     pending_[p->id] = p;
     // Written under the lock: a replacement cannot close the socket meanwhile. The worker reads
     // requests on a thread of its own, so this never waits for device work.
-    if (!compile_protocol::writeFrame(worker_.fd, wire::encode(wire::Message{c.head, {}}))) {
+    const std::string frame = wire::encode(wire::Message{c.head, {}});
+    p->bytesSent = frame.size() + 4;  // with the frame's length prefix
+    if (!compile_protocol::writeFrame(worker_.fd, frame)) {
       // The worker is gone; the watchdog sees its channel close and replaces it.
       p->lost = true;
+    } else {
+      setInFlightLocked(*p, true);
     }
     out = p;
     return {};
+  }
+
+  // Counts `p` into or out of the requests in flight (mutex_ held).
+  void setInFlightLocked(Pending& p, bool inFlight) {
+    if (p.inFlight == inFlight) return;
+    const Clock::time_point now = Clock::now();
+    inFlightSeconds_ += double(inFlight_) * std::chrono::duration<double>(now - inFlightSince_).count();
+    inFlightSince_ = now;
+    p.inFlight = inFlight;
+    inFlight ? ++inFlight_ : --inFlight_;
+    maxInFlight_ = std::max(maxInFlight_, inFlight_);
+  }
+
+  // The channel counters of `p`, answered by `reply` of `replyBytes` (mutex_ held).
+  void countReplyLocked(Pending& p, const wire::Message& reply, size_t replyBytes) {
+    setInFlightLocked(p, false);
+    RendererCounters::ChannelOp& op = channel_[p.op];
+    op.requests += 1;
+    op.bytesToWorker += p.bytesSent;
+    op.bytesFromWorker += replyBytes;
+    op.roundTripSeconds += std::chrono::duration<double>(Clock::now() - p.start).count();
+    auto worker = reply.head.find("worker_us");
+    if (worker != reply.head.end() && worker->is_array() && worker->size() == 2) {
+      op.workerQueueSeconds += (*worker)[0].get<double>() / 1e6;
+      op.workerServeSeconds += (*worker)[1].get<double>() / 1e6;
+    }
   }
 
   // A worker with its device open (not yet live).
@@ -469,7 +516,10 @@ class RemoteRenderer : public Renderer, public std::enable_shared_from_this<Remo
     ++generation_;
     alive_ = true;
     startError_.clear();
-    reader_ = std::thread([this, fd = child.fd, gen = generation_] { read(fd, gen); });
+    reader_ = std::thread([this, fd = child.fd, gen = generation_] {
+      ::pthread_setname_np(::pthread_self(), "brdfa-channel");
+      read(fd, gen);
+    });
     changed_.notify_all();
   }
 
@@ -488,6 +538,7 @@ class RemoteRenderer : public Renderer, public std::enable_shared_from_this<Remo
       }
       auto it = pending_.find(m.head.value("id", uint64_t(0)));
       if (it == pending_.end() || it->second->generation != generation) continue;
+      countReplyLocked(*it->second, m, frame.size() + 4);
       it->second->reply = std::move(m);
       it->second->done = true;
       it->second->answered.notify_one();
@@ -665,6 +716,11 @@ class RemoteRenderer : public Renderer, public std::enable_shared_from_this<Remo
   std::optional<worker_process::Child> spare_;
   std::condition_variable_any spareWanted_;
   std::map<uint64_t, std::shared_ptr<Pending>> pending_;
+  // The channel's figures (RendererCounters::channel), across workers.
+  std::map<std::string, RendererCounters::ChannelOp> channel_;
+  uint64_t inFlight_ = 0, maxInFlight_ = 0;
+  double inFlightSeconds_ = 0;  // up to inFlightSince_
+  Clock::time_point inFlightSince_ = Clock::now();
   uint64_t nextId_ = 1;
   uint64_t nextViewId_ = 1;
   uint64_t restarts_ = 0;
