@@ -17,6 +17,7 @@
 
 #include "bench_util.h"
 #include "bench_nonce.h"
+#include "class_breakdown.h"
 #include "brdfa/image_codec.h"
 #include "server_process.h"
 
@@ -177,6 +178,9 @@ bool measureService(const std::string& serverBinary, const std::string& sourceDi
 struct ClassFigures {
   double minFps = 0, medianFps = 0, maxFps = 0;
   double serverRssMiB = 0;
+  // Where the time went over the steady part of the run (class_breakdown.h).
+  ClassSnapshot before, after;
+  double windowFrames = 0, windowSeconds = 0;
 };
 
 // `sessions` sessions of the default scene, each with one stream client, for `seconds`: the
@@ -203,7 +207,7 @@ bool measureClass(const std::string& serverBinary, const std::string& sourceDir,
     }
     ids.push_back(nlohmann::json::parse(r->body).value("id", ""));
   }
-  std::vector<int> parts(ids.size(), 0);
+  std::vector<std::atomic<int>> parts(ids.size());
   std::vector<std::thread> streams;
   const auto t0 = Clock::now();
   for (size_t i = 0; i < ids.size(); ++i) {
@@ -221,12 +225,26 @@ bool measureClass(const std::string& serverBinary, const std::string& sourceDir,
       });
     });
   }
-  std::this_thread::sleep_for(std::chrono::duration<double>(seconds * 0.9));
+  // The breakdown's window: after the first frames of every session, until just before the
+  // streams end.
+  auto framesSoFar = [&] {
+    double n = 0;
+    for (const std::atomic<int>& p : parts) n += p.load();
+    return n;
+  };
+  std::this_thread::sleep_until(t0 + std::chrono::duration<double>(std::min(3.0, seconds * 0.2)));
+  const double framesBefore = framesSoFar();
+  const auto windowStart = Clock::now();
+  out.before = takeClassSnapshot(server.pid(), server.port());
+  std::this_thread::sleep_until(t0 + std::chrono::duration<double>(seconds * 0.9));
+  out.after = takeClassSnapshot(server.pid(), server.port());
+  out.windowSeconds = msSince(windowStart) / 1000.0;
+  out.windowFrames = framesSoFar() - framesBefore;
   out.serverRssMiB = double(server.treeResidentBytes()) / (1 << 20);
   for (std::thread& t : streams) t.join();
   const double elapsed = msSince(t0) / 1000.0;
   std::vector<double> fps;
-  for (int p : parts) fps.push_back(p / elapsed);
+  for (const std::atomic<int>& p : parts) fps.push_back(p.load() / elapsed);
   std::sort(fps.begin(), fps.end());
   out.minFps = fps.front();
   out.maxFps = fps.back();
@@ -234,22 +252,37 @@ bool measureClass(const std::string& serverBinary, const std::string& sourceDir,
   return server.terminate() == 0;
 }
 
+// $BRDFA_BENCH_BASELINE_SERVER: another build's brdfa-server measured the same way in this run
+// (with no extra flags), for ratios against an earlier version, with its own shaders and web
+// files ($BRDFA_BENCH_BASELINE_ROOT, its checkout: this tree's may not match an older server's
+// bindings). $BRDFA_BENCH_ROUNDS (default 1): rounds of all configurations, one after the other
+// in each round, so a machine's slow phase falls on all of them; each figure is the median over
+// rounds.
+struct HttpBenchSettings {
+  const char* baseline = nullptr;
+  std::string baselineRoot;
+  int rounds = 1;
+};
+
+HttpBenchSettings httpBenchSettings(const std::string& sourceDir) {
+  HttpBenchSettings s;
+  s.baseline = std::getenv("BRDFA_BENCH_BASELINE_SERVER");
+  const char* baselineRootEnv = std::getenv("BRDFA_BENCH_BASELINE_ROOT");
+  s.baselineRoot = baselineRootEnv ? baselineRootEnv : sourceDir;
+  const char* roundsText = std::getenv("BRDFA_BENCH_ROUNDS");
+  s.rounds = std::clamp(roundsText ? std::atoi(roundsText) : 1, 1, 50);
+  return s;
+}
+
 }  // namespace
 
 int runHttpBench(const std::string& serverBinary, const std::string& sourceDir) {
   // The same figures with the device in the supervised render worker (the default) and in the
-  // server's own process (--in-process, as before issue 12), one after the other in one run.
-  // $BRDFA_BENCH_BASELINE_SERVER: another build's brdfa-server measured the same way in this run
-  // (with no extra flags), for ratios against an earlier version.
-  // $BRDFA_BENCH_ROUNDS (default 1): rounds of all configurations, one after the other in each
-  // round, so a machine's slow phase falls on all of them; each figure is the median over rounds.
-  const char* baseline = std::getenv("BRDFA_BENCH_BASELINE_SERVER");
-  // Its own shaders and web files ($BRDFA_BENCH_BASELINE_ROOT, its checkout): this tree's may not
-  // match an older server's bindings.
-  const char* baselineRootEnv = std::getenv("BRDFA_BENCH_BASELINE_ROOT");
-  const std::string baselineRoot = baselineRootEnv ? baselineRootEnv : sourceDir;
-  const char* roundsText = std::getenv("BRDFA_BENCH_ROUNDS");
-  const int rounds = std::clamp(roundsText ? std::atoi(roundsText) : 1, 1, 50);
+  // server's own process (--in-process), one after the other in one run.
+  const HttpBenchSettings settings = httpBenchSettings(sourceDir);
+  const char* baseline = settings.baseline;
+  const std::string& baselineRoot = settings.baselineRoot;
+  const int rounds = settings.rounds;
   std::vector<ServiceFigures> isolatedRuns, inProcessRuns, beforeRuns;
   for (int round = 0; round < rounds; ++round) {
     ServiceFigures a, b, c;
@@ -291,6 +324,14 @@ int runHttpBench(const std::string& serverBinary, const std::string& sourceDir) 
   rows("PNG frames received on the stream", &ServiceFigures::fps, "frames/s", "target >= 20");
   rows("  while the camera orbits (a PATCH every 40 ms)", &ServiceFigures::orbitFps, "frames/s", "target >= 20");
 
+  return runClassBench(serverBinary, sourceDir);
+}
+
+int runClassBench(const std::string& serverBinary, const std::string& sourceDir) {
+  const HttpBenchSettings settings = httpBenchSettings(sourceDir);
+  const char* baseline = settings.baseline;
+  const std::string& baselineRoot = settings.baselineRoot;
+  const int rounds = settings.rounds;
   // A class: 30 sessions streaming at once (issue 12 measured 1.87 frames/s each, even), one
   // address (the cap on connections per address raised for it).
   const std::vector<std::string> classArgs{"--max-connections-per-address", "256"};
@@ -328,7 +369,14 @@ int runHttpBench(const std::string& serverBinary, const std::string& sourceDir) 
   }
   if (baseline)
     row("frames/s per session, render worker / baseline build", runs[0].second.medianFps / runs[2].second.medianFps,
-        "ratio", "issue 12: within 10%");
+        "ratio", "within 10%");
+  // The last round's breakdown of each mode: where the worker loses frames against in-process.
+  for (int mode = 0; mode < 2; ++mode) {
+    if (perMode[mode].empty()) continue;
+    const ClassFigures& f = perMode[mode].back();
+    printClassBreakdown(f.before, f.after, f.windowFrames, f.windowSeconds,
+                        mode == 0 ? "A class, render worker" : "A class, --in-process");
+  }
   return 0;
 }
 

@@ -1,6 +1,6 @@
 // brdfa-bench: prints the figures docs/design.md section 5 asks for, as medians, in one run: the
 // renderer's (library level) and the service's (through the real server over loopback HTTP).
-//   brdfa-bench [--rounds N] [--source DIR] [--only renderer|scenes|sampling|split|http|auth] [--scene TEXT]
+//   brdfa-bench [--rounds N] [--source DIR] [--only renderer|scenes|sampling|split|http|class|auth] [--scene TEXT]
 //   brdfa-bench --only shaders --against DIR[,DIR...]   (shader work: DIR/shaders against --source's, interleaved)
 #include <cstdio>
 #include <cstdlib>
@@ -28,7 +28,7 @@ int main(int argc, char** argv) {
     else if (a == "--scene" && i + 1 < argc) sceneFilter = argv[++i];  // sampling scenes whose label holds TEXT
     else if (a == "--against" && i + 1 < argc) against = argv[++i];
     else {
-      std::fprintf(stderr, "usage: brdfa-bench [--rounds N] [--source DIR] [--only renderer|scenes|sampling|split|http|auth] [--scene TEXT] [--only shaders --against DIR[,DIR...]]\n");
+      std::fprintf(stderr, "usage: brdfa-bench [--rounds N] [--source DIR] [--only renderer|scenes|sampling|split|http|class|auth] [--scene TEXT] [--only shaders --against DIR[,DIR...]]\n");
       return 2;
     }
   }
@@ -48,6 +48,7 @@ int main(int argc, char** argv) {
   if (wanted("sampling") && (code = brdfa::bench::runSamplingBench(source, std::max(1, rounds / 5), sceneFilter)) != 0) return code;
   if (wanted("split") && (code = brdfa::bench::runSplitBench(source, rounds)) != 0) return code;
   if (wanted("http") && (code = brdfa::bench::runHttpBench(BRDFA_SERVER_BINARY, source)) != 0) return code;
+  if (only == "class" && (code = brdfa::bench::runClassBench(BRDFA_SERVER_BINARY, source)) != 0) return code;
   if (wanted("auth")) code = brdfa::bench::runAuthBench(BRDFA_SERVER_BINARY, source, std::max(5, rounds));
   return code;
 }
