@@ -19,6 +19,7 @@
 #include <string>
 #include <thread>
 
+#include "brdfa/heap_tuning.h"
 #include "brdfa/renderer.h"
 #include "compile_protocol.h"
 #include "device_activity.h"
@@ -322,6 +323,7 @@ int main() {
   using namespace brdfa;
   // A server killed without a chance to close the channel still takes its worker along.
   prctl(PR_SET_PDEATHSIG, SIGKILL);
+  keepFrameBuffersInHeap();
   // The protocol owns the channel; anything a library prints goes to stderr instead.
   const int channel = dup(0);
   dup2(2, 1);

@@ -7,10 +7,12 @@
 #include <cstdio>
 #include <thread>
 
+#include "brdfa/heap_tuning.h"
 #include "brdfa_server/config.h"
 #include "brdfa_server/http_server.h"
 
 int main(int argc, char** argv) {
+  brdfa::keepFrameBuffersInHeap();
   // A client that disconnects mid-write must cost an error return, not the process.
   ::signal(SIGPIPE, SIG_IGN);
   // Block the stop signals before any thread exists (the device driver starts some), so they
