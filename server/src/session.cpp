@@ -4,6 +4,8 @@
 
 #include <algorithm>
 #include <cstdio>
+#include <functional>
+#include <string_view>
 
 #include "brdfa/image_codec.h"
 #include "brdfa/image_resample.h"
@@ -338,6 +340,14 @@ std::vector<uint8_t> Session::encodeStreamPng(const RawFrame& raw) {
   return encodePng(raw.rgba8.data(), raw.width, raw.height, text);
 }
 
+size_t Session::frameKey(const RawFrame& raw) {
+  size_t key = std::hash<std::string_view>{}(
+      std::string_view(reinterpret_cast<const char*>(raw.rgba8.data()), raw.rgba8.size()));
+  for (uint64_t v : {uint64_t(raw.width), uint64_t(raw.height), raw.spp, raw.sceneVersion, uint64_t(raw.done)})
+    key = key * 1000003u ^ std::hash<uint64_t>{}(v);
+  return key;
+}
+
 void Session::encodeLoop() {
   std::unique_lock lock(mutex_);
   while (!stopping_) {
@@ -348,6 +358,12 @@ void Session::encodeLoop() {
     RawFrame raw = std::move(*pendingRaw_);
     pendingRaw_.reset();
     lock.unlock();
+    const size_t key = frameKey(raw);
+    if (key == lastEncodedKey_) {  // nothing new to show
+      lock.lock();
+      continue;
+    }
+    lastEncodedKey_ = key;
     const auto encodeStart = Clock::now();
     auto png = std::make_shared<const std::vector<uint8_t>>(encodeStreamPng(raw));
     const double encodeMs = std::chrono::duration<double, std::milli>(Clock::now() - encodeStart).count();

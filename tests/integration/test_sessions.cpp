@@ -196,8 +196,11 @@ TEST_F(Sessions, StreamDeliversMultipartPngParts) {
   ASSERT_TRUE(framingOk) << reader.error;
   ASSERT_GE(reader.pngs.size(), 2u);
   for (const std::string& png : reader.pngs) EXPECT_EQ(png.substr(0, 8), std::string("\x89PNG\r\n\x1a\n", 8));
-  // Only newer frames are sent.
-  EXPECT_GT(reader.samples[1], reader.samples[0]);
+  // Only newer frames are sent: more samples, or the same count with more of a pass shown (a
+  // slow pass, as under the sanitizers, is shown partway at the stream's frame interval).
+  EXPECT_TRUE(reader.samples[1] > reader.samples[0] || (reader.samples[1] == reader.samples[0] && reader.pngs[1] != reader.pngs[0]))
+      << "samples " << reader.samples[0] << " then " << reader.samples[1] << ", the same image: "
+      << (reader.pngs[1] == reader.pngs[0]);
 
   // After a scene change a new client gets only frames of the new scene (the old one had far
   // more than 8 spp), ending promptly with the converged frame (Kd changes, so accumulation

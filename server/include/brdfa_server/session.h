@@ -217,8 +217,14 @@ class Session {
   };
   // The stream PNG of `raw`: a half-size preview below kPreviewBelowSpp, its spp in a tEXt chunk.
   static std::vector<uint8_t> encodeStreamPng(const RawFrame& raw);
+  // A hash of the frame's pixels and what its PNG says (size, samples, scene, final).
+  static size_t frameKey(const RawFrame& raw);
   std::optional<RawFrame> pendingRaw_;
   std::condition_variable encodeWake_;
+  // frameKey of what the encoder last published (encodeLoop only; 0: nothing yet): a frame
+  // equal to it is not sent again. A pass shown partway before any of its tiles finished reads
+  // back the same image.
+  size_t lastEncodedKey_ = 0;
 
   std::mutex joinMutex_;  // DELETE and server shutdown may both stop a session; one joins
 
