@@ -32,6 +32,7 @@ bool ok(const httplib::Result& r, int status = 200) { return r && r->status == s
 struct ServiceFigures {
   double editMs = 0, sliderMs = 0, fps = 0;
   double editFullMs = 0, sliderFullMs = 0, orbitFps = 0;
+  double scriptEditMs = 0, scriptSliderMs = 0;  // with no stream open: a script's wait
 };
 
 // Watches a session's stream on a connection of its own, as the web UI does: when each part
@@ -114,6 +115,27 @@ bool measureService(const std::string& serverBinary, const std::string& sourceDi
     std::fprintf(stderr, "could not set up the default session\n");
     return false;
   }
+  const std::string ggx = readText(sourceDir + "/shaders/brdfs/ggx.brdf");
+  // A script's view first, with no stream open: PUT or PATCH, then GET /frame?min_spp=1 at once.
+  std::vector<double> scriptEditMs, scriptSliderMs;
+  for (int i = 0; i < 5; ++i) {
+    const std::string name = "bench_script_" + std::to_string(i);
+    const auto t0 = Clock::now();
+    if (!ok(cli->Put("/api/brdfs/" + name, withUniqueFactor(ggx, "D_GGX(", 100 + i), "text/plain"), 201) ||
+        !ok(cli->Patch(scene, nlohmann::json{{"objects", {{{"brdf", name}}}}}.dump(), "application/json")) ||
+        !ok(cli->Get(frame)))
+      return false;
+    scriptEditMs.push_back(msSince(t0));
+  }
+  for (int i = 0; i < 11; ++i) {
+    nlohmann::json patch = {{"objects", {{{"brdf", "ggx"}, {"params", {{"roughness", 0.25 + 0.05 * i}}}}}}};
+    const auto t0 = Clock::now();
+    if (!ok(cli->Patch(scene, patch.dump(), "application/json")) || !ok(cli->Get(frame))) return false;
+    if (i > 0) scriptSliderMs.push_back(msSince(t0));  // the first switches back to ggx
+  }
+  out.scriptEditMs = median(scriptEditMs);
+  out.scriptSliderMs = median(scriptSliderMs);
+
   StreamWatcher stream(server, "/api/sessions/default/stream");
   auto sceneVersion = [&]() -> uint64_t {
     auto r = cli->Get("/api/sessions/default/stats");
@@ -129,7 +151,6 @@ bool measureService(const std::string& serverBinary, const std::string& sourceDi
   };
 
   // A new BRDF each time: a changed constant in the code, so no cache of any kind can help.
-  const std::string ggx = readText(sourceDir + "/shaders/brdfs/ggx.brdf");
   std::vector<double> editMs, editFullMs;
   for (int i = 0; i < 5; ++i) {
     const std::string source = withUniqueFactor(ggx, "D_GGX(", i);
@@ -302,7 +323,8 @@ int runHttpBench(const std::string& serverBinary, const std::string& sourceDir) 
     };
     return ServiceFigures{of(&ServiceFigures::editMs),      of(&ServiceFigures::sliderMs),
                           of(&ServiceFigures::fps),         of(&ServiceFigures::editFullMs),
-                          of(&ServiceFigures::sliderFullMs), of(&ServiceFigures::orbitFps)};
+                          of(&ServiceFigures::sliderFullMs), of(&ServiceFigures::orbitFps),
+                          of(&ServiceFigures::scriptEditMs), of(&ServiceFigures::scriptSliderMs)};
   };
   const ServiceFigures isolated = medianOf(isolatedRuns), inProcess = medianOf(inProcessRuns),
                        before = medianOf(beforeRuns);
@@ -318,9 +340,13 @@ int runHttpBench(const std::string& serverBinary, const std::string& sourceDir) 
   };
   rows("PUT new BRDF -> switch scene -> first frame on the stream", &ServiceFigures::editMs, "ms",
        "target <= 200; median of 5");
-  rows("  -> first 1-sample frame (GET /frame?min_spp=1)", &ServiceFigures::editFullMs, "ms", "");
+  rows("  -> first 1-sample frame (GET /frame?min_spp=1)", &ServiceFigures::editFullMs, "ms", "after the stream's");
+  rows("  a script, no stream: PUT, PATCH -> first 1-sample frame", &ServiceFigures::scriptEditMs, "ms",
+       "target <= 200; median of 5");
   rows("parameter change -> next frame on the stream", &ServiceFigures::sliderMs, "ms", "target <= 60; median of 10");
-  rows("  -> first 1-sample frame (GET /frame?min_spp=1)", &ServiceFigures::sliderFullMs, "ms", "");
+  rows("  -> first 1-sample frame (GET /frame?min_spp=1)", &ServiceFigures::sliderFullMs, "ms", "after the stream's");
+  rows("  a script, no stream: PATCH -> first 1-sample frame", &ServiceFigures::scriptSliderMs, "ms",
+       "target <= 60; median of 10");
   rows("PNG frames received on the stream", &ServiceFigures::fps, "frames/s", "target >= 20");
   rows("  while the camera orbits (a PATCH every 40 ms)", &ServiceFigures::orbitFps, "frames/s", "target >= 20");
 
