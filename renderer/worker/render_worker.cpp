@@ -98,26 +98,30 @@ class Worker {
     }
   }
 
-  void reply(uint64_t id, Result<json> value, std::string tail = {}) {
-    wire::Message m;
-    m.head["id"] = id;
-    m.head["ok"] = value.ok();
+  // `tail`: the reply's binary tail, in pieces sent as they are (a frame's pixels).
+  void reply(uint64_t id, Result<json> value, std::initializer_list<std::string_view> tail = {}) {
+    json head;
+    head["id"] = id;
+    head["ok"] = value.ok();
     if (value.ok())
-      m.head["value"] = std::move(value.value());
+      head["value"] = std::move(value.value());
     else
-      m.head["error"] = wire::toJson(value.error());
-    m.tail = std::move(tail);
+      head["error"] = wire::toJson(value.error());
     // Where the request's time went here: waiting for a thread, then served (the server's
     // channel counters, RendererCounters::channel).
     const auto now = std::chrono::steady_clock::now();
     if (timing_.started != std::chrono::steady_clock::time_point{})
-      m.head["worker_us"] = {
+      head["worker_us"] = {
           std::chrono::duration_cast<std::chrono::microseconds>(timing_.started - timing_.received).count(),
           std::chrono::duration_cast<std::chrono::microseconds>(now - timing_.started).count()};
-    const std::string bytes = wire::encode(m);
+    const std::string encodedHead = wire::encodeHead(head);
+    std::string_view parts[3] = {encodedHead, {}, {}};
+    size_t n = 1;
+    for (std::string_view t : tail)
+      if (n < 3) parts[n++] = t;
     std::lock_guard lock(writeMutex_);
     // A failed write means the server is gone; the reader sees end of input and exits.
-    compile_protocol::writeFrame(channel_, bytes);
+    compile_protocol::writeFrameParts(channel_, {parts[0], parts[1], parts[2]});
   }
 
   std::shared_ptr<RenderView> view(const json& head) {
@@ -284,10 +288,9 @@ class Worker {
       if (!frame) return reply(id, frame.takeError());
       Frame& f = frame.value();
       // Pixels travel in the binary tail: 8-bit first, then the float ones when asked.
-      std::string tail(reinterpret_cast<const char*>(f.rgba8.data()), f.rgba8.size());
-      tail.append(reinterpret_cast<const char*>(f.rgba32f.data()), f.rgba32f.size() * sizeof(float));
       reply(id, json{{"width", f.width}, {"height", f.height}, {"linear", !f.rgba32f.empty()}, {"stats", wire::toJson(f.stats)}},
-            std::move(tail));
+            {std::string_view(reinterpret_cast<const char*>(f.rgba8.data()), f.rgba8.size()),
+             std::string_view(reinterpret_cast<const char*>(f.rgba32f.data()), f.rgba32f.size() * sizeof(float))});
     } else {
       reply(id, makeError(ErrorCode::Internal, "render worker: unknown operation " + op));
     }

@@ -54,18 +54,18 @@ static_assert(sizeof(RendererOptions) == 264, "RendererOptions changed: update t
 static_assert(sizeof(SceneObject) == 192, "SceneObject changed: update toJson(Scene)/sceneFromJson");
 #endif
 
-std::string encode(const Message& message) {
+std::string encodeHead(const nlohmann::json& head) {
   // CBOR, not JSON text: NaN and infinities (a check's worst value) survive it.
-  std::string head;
-  json::to_cbor(message.head, head);
+  std::string cbor;
+  json::to_cbor(head, cbor);
   std::string out(sizeof(uint32_t), '\0');
-  const uint32_t n = static_cast<uint32_t>(head.size());
+  const uint32_t n = static_cast<uint32_t>(cbor.size());
   std::memcpy(out.data(), &n, sizeof n);
-  out.reserve(out.size() + head.size() + message.tail.size());
-  out += head;
-  out += message.tail;
+  out += cbor;
   return out;
 }
+
+std::string encode(const Message& message) { return encodeHead(message.head) + message.tail; }
 
 bool decode(const std::string& frame, Message& message) {
   uint32_t n = 0;

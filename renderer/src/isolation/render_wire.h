@@ -20,6 +20,9 @@ struct Message {
 };
 
 std::string encode(const Message& message);
+// encode() of a message without its tail: the tail's bytes follow it in the frame
+// (compile_protocol::writeFrameParts), so a large one need not be copied in.
+std::string encodeHead(const nlohmann::json& head);
 // False when the bytes are not a message.
 bool decode(const std::string& frame, Message& message);
 

@@ -1,10 +1,14 @@
 #include "compile_protocol.h"
 
+#include <limits.h>
 #include <sys/socket.h>
+#include <sys/uio.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <cstring>
+#include <vector>
 
 namespace brdfa::compile_protocol {
 namespace {
@@ -133,18 +137,32 @@ std::optional<Result<SpirvBinary>> decodeReply(const std::string& frame) {
   return Result<SpirvBinary>(std::move(e));
 }
 
-bool writeFrame(int fd, const std::string& payload) {
-  std::string frame(sizeof(uint32_t), '\0');
-  const uint32_t n = static_cast<uint32_t>(payload.size());
-  std::memcpy(frame.data(), &n, sizeof n);
-  frame += payload;
-  size_t sent = 0;
-  while (sent < frame.size()) {
+bool writeFrame(int fd, const std::string& payload) { return writeFrameParts(fd, {payload}); }
+
+bool writeFrameParts(int fd, std::initializer_list<std::string_view> parts) {
+  size_t total = 0;
+  for (std::string_view p : parts) total += p.size();
+  const uint32_t n = static_cast<uint32_t>(total);
+  std::vector<iovec> iov;
+  iov.push_back({const_cast<uint32_t*>(&n), sizeof n});
+  for (std::string_view p : parts)
+    if (!p.empty()) iov.push_back({const_cast<char*>(p.data()), p.size()});
+  size_t first = 0;  // the first iovec not yet sent whole
+  while (first < iov.size()) {
+    msghdr msg{};
+    msg.msg_iov = iov.data() + first;
+    msg.msg_iovlen = std::min<size_t>(iov.size() - first, IOV_MAX);
     // MSG_NOSIGNAL: a worker that died must not take the server down with SIGPIPE.
-    const ssize_t k = ::send(fd, frame.data() + sent, frame.size() - sent, MSG_NOSIGNAL);
+    const ssize_t k = ::sendmsg(fd, &msg, MSG_NOSIGNAL);
     if (k < 0 && errno == EINTR) continue;
     if (k <= 0) return false;
-    sent += static_cast<size_t>(k);
+    for (size_t sent = size_t(k); sent > 0;) {  // drop what went out, part of an iovec included
+      const size_t here = std::min(sent, iov[first].iov_len);
+      iov[first].iov_base = static_cast<char*>(iov[first].iov_base) + here;
+      iov[first].iov_len -= here;
+      sent -= here;
+      if (iov[first].iov_len == 0) ++first;
+    }
   }
   return true;
 }

@@ -10,7 +10,9 @@
 
 #include <cstdint>
 #include <optional>
+#include <initializer_list>
 #include <string>
+#include <string_view>
 
 #include "brdfa/result.h"
 #include "glsl_compiler.h"
@@ -27,6 +29,9 @@ std::optional<Result<SpirvBinary>> decodeReply(const std::string& frame);
 
 // Blocking frame I/O on a socket or pipe; false on EOF or error. Writes never raise SIGPIPE.
 bool writeFrame(int fd, const std::string& payload);
+// One frame whose payload is `parts` one after the other, sent without joining them first (a
+// frame's pixels go out straight from where they were read back).
+bool writeFrameParts(int fd, std::initializer_list<std::string_view> parts);
 bool readFrame(int fd, std::string& payload, uint32_t maxBytes);
 
 }  // namespace brdfa::compile_protocol
