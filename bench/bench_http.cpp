@@ -358,7 +358,7 @@ int runClassBench(const std::string& serverBinary, const std::string& sourceDir)
   const char* baseline = settings.baseline;
   const std::string& baselineRoot = settings.baselineRoot;
   const int rounds = settings.rounds;
-  // A class: 30 sessions streaming at once (issue 12 measured 1.87 frames/s each, even), one
+  // A class: 30 sessions streaming at once (every session should get an even share), one
   // address (the cap on connections per address raised for it).
   const std::vector<std::string> classArgs{"--max-connections-per-address", "256"};
   std::vector<std::pair<std::string, ClassFigures>> runs;

@@ -1,4 +1,4 @@
-// Sampling strategies at equal time (issue 11): for each scene, every strategy renders for the
+// Sampling strategies at equal time: for each scene, every strategy renders for the
 // same render time, interleaved pass by pass so all see the same machine load; its relMSE is
 // measured against two long MIS references with seeds of their own (see relMse) and divided
 // into cosine's. Repeated `rounds` times on fresh accumulations; the

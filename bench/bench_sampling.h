@@ -1,7 +1,7 @@
 #pragma once
 #include <string>
 namespace brdfa::bench {
-// Prints the sampling-strategy table of issue 11 (equal-time relMSE against cosine, samples/s);
+// Prints the sampling-strategy table (equal-time relMSE against cosine, samples/s);
 // returns a process exit code. `sceneFilter` (if not empty) keeps the scenes whose label holds it.
 int runSamplingBench(const std::string& sourceDir, int rounds, const std::string& sceneFilter = "");
 }  // namespace brdfa::bench

@@ -1,4 +1,4 @@
-// Scene figures (issue 4): mesh size must not change the cost of a progressive pass (the
+// Scene figures: mesh size must not change the cost of a progressive pass (the
 // visibility is rasterized once per camera change), and a scene's program holds only what the
 // scene uses.
 #include "bench_scenes.h"

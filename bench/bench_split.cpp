@@ -1,5 +1,5 @@
 // The cost of splitting passes into submissions of about RendererOptions::submissionTargetMs
-// (issue 12) for a normal scene: two renderers in one process, one splitting (the default
+// for a normal scene: two renderers in one process, one splitting (the default
 // target) and one not (target 0), their passes interleaved so both see the same machine load.
 #include "bench_split.h"
 

@@ -20,7 +20,7 @@ nodejs npm"
 RUN_TEST_PACKAGES="mesa-vulkan-drivers libgtest-dev chromium haproxy"
 
 # Wanted but not required: blender-data ships eight CC0 equirectangular EXR worlds that the
-# server offers as environments blender_<name> when present (issue 4). Tried once per machine.
+# server offers as environments blender_<name> when present. Tried once per machine.
 OPTIONAL="blender-data"
 OPTIONAL_STAMP=/var/lib/brdfa-optional-packages-tried
 

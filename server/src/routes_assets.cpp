@@ -1,4 +1,4 @@
-// Assets (issue 4): POST /api/assets (multipart upload), GET /api/assets[?kind=],
+// Assets: POST /api/assets (multipart upload), GET /api/assets[?kind=],
 // GET /api/assets/{id}, DELETE /api/assets/{id}. Validation and storage live in AssetStore; this file reads the
 // multipart body without holding more than one file's worth of it.
 #include <algorithm>

@@ -1,5 +1,5 @@
 // GET /api/sessions/{a}/difference?against={b}: the signed difference of two sessions' frames
-// (the side-by-side view, issue 13 item 3) as a PNG on a diverging colour map, or its figures
+// (the side-by-side view) as a PNG on a diverging colour map, or its figures
 // as JSON (frame_difference.h).
 #include <cmath>
 #include <cstdio>

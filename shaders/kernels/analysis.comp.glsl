@@ -1,4 +1,4 @@
-// Analysis of a BRDF (issue 13): evaluates the file's own BRDF() where the host asks, in the
+// Analysis of a BRDF: evaluates the file's own BRDF() where the host asks, in the
 // frame N = +z, X = +x, Y = +y. The host (brdf_analysis.cpp) passes the work in the read-only
 // binding 0 (brdfa_gbuffer, unused otherwise by analysis):
 //   brdfa_gbuffer[0] = (mode, items, samples per chunk, chunks per view), as uintBitsToFloat;

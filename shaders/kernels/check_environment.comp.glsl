@@ -1,4 +1,4 @@
-// Draws of the environment sampler for Renderer::checkEnvironmentSampler (issue 11). Invocation
+// Draws of the environment sampler for Renderer::checkEnvironmentSampler. Invocation
 // k draws one direction from independent pseudo-random numbers (a chi-square test needs
 // independent draws, not a low-discrepancy sequence) and writes
 //   out[2k] = (direction, the pdf the sampler returned), out[2k + 1] = (brdfa_environmentPdf

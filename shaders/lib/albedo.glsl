@@ -1,5 +1,5 @@
 // Directional albedo E(V) = integral over the hemisphere of f(L, V) (N.L) dL, by Monte Carlo in
-// the frame N = +z, X = +x, Y = +y (issue 13). Used by the analysis kernel (the albedo curve)
+// the frame N = +z, X = +x, Y = +y. Used by the analysis kernel (the albedo curve)
 // and by the check kernel (energy conservation), so both report the same estimate.
 //
 // Estimators (each unbiased for the integral of the BRDF() the renderer shades with):

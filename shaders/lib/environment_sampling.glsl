@@ -1,4 +1,4 @@
-// Importance sampling of the environment (issue 11): directions in proportion to luminance
+// Importance sampling of the environment: directions in proportion to luminance
 // times solid angle, from the alias table built by renderer/src/assets/environment_sampling.cpp.
 // Both functions work in the environment's frame (lib/environment.glsl), as lookups do.
 // A constant environment (the furnace) has no table: it is sampled uniformly over the sphere.

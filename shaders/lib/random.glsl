@@ -28,7 +28,7 @@ vec2 brdfa_sample2D(uvec2 rotation, uint i) {
   return vec2(r >> 8u) * (1.0 / 16777216.0);
 }
 
-// --- Four dimensions per sample, two independent replicates (issue 11).
+// --- Four dimensions per sample, two independent replicates.
 //
 // Sample i of a pixel goes to half accumulator i & 1 as point j = i >> 1 of that half's own
 // sequence, shifted by that half's own random rotation: the two halves are statistically

@@ -617,7 +617,7 @@ async function checks(tmp, setServer) {
   let hj = {};
   try { hj = JSON.parse(health.body.toString('utf8')); } catch { /* reported below */ }
   record('d', 'GET /api/health', health.status === 200 && hj.status === 'ok', `${health.status} ${hj.status ?? ''} device ${hj.device?.name ?? '?'} (${hj.device?.type ?? '?'})`);
-  // Features of servers with --replica (issue 14); an older binary is reported, not failed.
+  // Features of servers with --replica; an older binary is reported, not failed.
   const tag = health.headers['x-brdfa-replica'];
   rows.push(['d', 'BRDFA_REPLICA from the environment', tag === undefined ? 'info' : tag === replicaTag ? 'ok' : 'FAIL',
     tag === undefined ? 'no X-Brdfa-Replica header: this server predates --replica' : `X-Brdfa-Replica: ${tag}`]);

@@ -1,4 +1,4 @@
-// POST /api/analysis/{polar,lobe,albedo,slice} (issue 13 item 1) over HTTP against the real
+// POST /api/analysis/{polar,lobe,albedo,slice} over HTTP against the real
 // server: each plot checked against what the physics says it must be.
 #include <cmath>
 #include <sstream>
@@ -243,7 +243,7 @@ TEST_F(Analysis, BadRequestsAreRefusedWithTheirField) {
   EXPECT_NEAR(lum(out["series"][0]["values"]["incidence"][90]), 1.0 / kPi, 1e-6);
 }
 
-// Side by side (issue 13 item 3): two sessions under one camera and environment, their signed
+// Side by side: two sessions under one camera and environment, their signed
 // difference and its relative RMS with an error bar from both estimates.
 class SideBySide : public ServerTest {
  protected:

@@ -1,4 +1,4 @@
-// Uploads (issue 4): POST/GET /api/assets against the real server, with real files made here
+// Uploads: POST/GET /api/assets against the real server, with real files made here
 // (OBJ text, stb_image_write's PNG/JPEG/HDR, the renderer's EXR writer): every type uploads,
 // is listed, renders in a scene and survives a restart; bad, mislabelled and oversized files
 // are 400s that leave the server working; nothing a client names ever becomes a path.

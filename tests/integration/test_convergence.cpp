@@ -1,4 +1,4 @@
-// Issue 11, images that converge: render.target_error and render.sampling in scenes, the
+// Images that converge: render.target_error and render.sampling in scenes, the
 // session's error-against-time series (GET .../convergence, JSON and CSV), stopping at a target
 // error, and the strategy comparison job (POST /api/jobs/convergence).
 // Until environment importance sampling lands, "environment" and "mis" render as cosine does:
@@ -116,7 +116,7 @@ TEST_F(Convergence, SceneCarriesSamplingAndTargetError) {
 
 TEST_F(Convergence, SeriesGrowsAndFallsAtAMonteCarloRate) {
   // One sample per pass: with more, the renderer's current half-accumulator estimate levels off
-  // (about -0.2 at 4 per pass; see the issue 11 report). The series and fit are the same either way.
+  // (about -0.2 at 4 per pass). The series and fit are the same either way.
   std::string sid = createSession(skyLambert("cosine", 64, kMaxSamplesForever, nullptr, 1));
   ASSERT_FALSE(sid.empty());
   const std::string base = "/api/sessions/" + sid + "/convergence";

@@ -1,4 +1,4 @@
-// The frame saver (issue 4): PNG, PFM and EXR frames from sessions and one-shot renders, their
+// The frame saver: PNG, PFM and EXR frames from sessions and one-shot renders, their
 // Content-Disposition, and the tone maps of the PNG display image, checked on the white
 // furnace whose exact radiance is 1.
 #include <tinyexr.h>  // Debian's shared libtinyexr (no TINYEXR_IMPLEMENTATION)

@@ -1,4 +1,4 @@
-// Issue 12: the hostile corpus (tests/hostile/) against a real server. Each attack must get its
+// The hostile corpus (tests/hostile/) against a real server. Each attack must get its
 // documented answer, and the server must stay healthy and keep serving others meanwhile.
 #include <cmath>
 #include <atomic>
@@ -37,7 +37,7 @@ TEST_F(Hostile, MacroBombIsRefusedAtTheCompileBudgetWhileOtherCompilesGoOn) {
   // Let the bomb reach a worker, then compile something ordinary beside it. (A program not
   // compiled before: the SPIR-V cache must not answer for the compiler.)
   std::this_thread::sleep_for(std::chrono::milliseconds(300));
-  auto other = post("/api/brdfs/validate", lambert + "\n// issue 12 hostile test\n", "text/plain");
+  auto other = post("/api/brdfs/validate", lambert + "\n// a hostile test's variant\n", "text/plain");
   otherDoneAt = ++order;
   attacker.join();
 

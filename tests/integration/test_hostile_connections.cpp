@@ -1,4 +1,4 @@
-// Issue 12, connections: slow clients cannot take the workers, one address cannot take them
+// Connections: slow clients cannot take the workers, one address cannot take them
 // all, and a one-shot render whose client left gives its slot back within a pass. Raw sockets,
 // because httplib's client cannot trickle a request or hang up mid-render.
 #include <arpa/inet.h>

@@ -1,4 +1,4 @@
-// Issue 12, "the device contained": programs that hold the device (a huge private array whose
+// "the device contained": programs that hold the device (a huge private array whose
 // driver compile runs for minutes, loops too long for one submission) are stopped by the render
 // worker's watchdog and quarantined, while another session streams on.
 #include <sys/socket.h>

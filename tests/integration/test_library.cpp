@@ -397,7 +397,7 @@ TEST_F(LibraryApi, BuiltinsAreReadOnlyAndNamesAreChecked) {
 }
 
 // curl --data-binary sends application/x-www-form-urlencoded, and curl -F a multipart form:
-// a .brdf far over 8 KiB must be read as text either way (issue 12).
+// a .brdf far over 8 KiB must be read as text either way.
 TEST_F(LibraryApi, LargeBrdfIsReadAsTextWhateverItsContentType) {
   std::string text = readRepoFile("shaders/brdfs/lambert.brdf");
   ASSERT_FALSE(text.empty());
@@ -600,7 +600,7 @@ TEST_F(LibraryApi, BrdfaEngineFileIsSavedAsLegacyRendersAndIsNotAnalysed) {
   EXPECT_EQ(res["checks"]["error"], "unsupported") << res.dump();
 }
 
-// Issue 13: the engine's host shader defined PI and LI (`#define PI 3.14159265359`,
+// The engine's host shader defined PI and LI (`#define PI 3.14159265359`,
 // `#define LI 8.`) before the file's text, and some of its files use them without defining
 // them. Such a file is accepted and renders as the engine rendered it.
 constexpr const char* kEngineStyleUsingHostNames = R"(vec3 lit_lambert(vec3 L, vec3 N, vec3 k_d) {
@@ -697,7 +697,7 @@ TEST_F(LibraryApi, BatchJobOverAllRunsWhileTheStreamKeepsDelivering) {
   EXPECT_GE(partsDuringJob, 2) << "the stream stalled while the job ran";
 }
 
-// Issue 13 item 4: every built-in keeps what it claims, with zero NaN/Inf, and ggx's albedo
+// Every built-in keeps what it claims, with zero NaN/Inf, and ggx's albedo
 // stays <= 1 down to roughness 0.001; a file that claims what it does not keep fails, and its
 // log names the worst case.
 TEST_F(LibraryApi, BatchTestOfEveryBuiltinHoldsItsClaims) {

@@ -1,4 +1,4 @@
-// Issue 12: library, preset and BRDF operations racing from many clients. Eight clients send a
+// Library, preset and BRDF operations racing from many clients. Eight clients send a
 // random mix of PUT/GET/DELETE of two BRDF names and of their presets for a bounded time
 // (BRDFA_RACE_SECONDS, 30 by default; `make soak` runs 600). Every reply must be one of the
 // documented statuses of its route, the server must stay up, and afterwards a re-created BRDF

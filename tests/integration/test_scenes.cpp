@@ -1,4 +1,4 @@
-// Scenes (issue 4) through the real server: an uploaded equirectangular HDR lights a Lambert
+// Scenes through the real server: an uploaded equirectangular HDR lights a Lambert
 // sphere exactly as the irradiance integral says, several objects with their own BRDFs and
 // textures render and count their vertices, and the camera pitch is clamped.
 #include <cmath>
@@ -81,9 +81,9 @@ class Scenes : public ServerTest {
   }
 };
 
-// Issue 4's must-show: a white Lambertian sphere under an uploaded HDR that is 1 above the
+// A white Lambertian sphere under an uploaded HDR that is 1 above the
 // horizon and 0 below reflects E(n) / pi = (1 + n_y) / 2 at every pixel (the cosine-weighted
-// fraction of the hemisphere around n that lies above the horizon). Issue 11: under every
+// fraction of the hemisphere around n that lies above the horizon). Under every
 // sampling mode, the image matches within 1% at 1024 samples.
 TEST_F(Scenes, UploadedHdrHemisphereLightsALambertSphereAsTheIrradianceIntegralSays) {
   const std::string id = upload(upperHemisphereHdr(512, 256), "hemisphere.hdr", "environment");

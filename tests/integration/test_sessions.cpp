@@ -483,7 +483,7 @@ TEST_F(Sessions, NanProducingBrdfIsCountedAndNeverReachesPixels) {
   for (float v : img.rgba) ASSERT_TRUE(std::isfinite(v));
 }
 
-// Issue 13 item 6: values carried from one BRDF to another by name (the UI keeps them) that
+// Values carried from one BRDF to another by name (the UI keeps them) that
 // fall outside the new BRDF's range are clamped, the scene says so, and nothing renders NaN.
 TEST_F(Sessions, ParameterValuesOutsideTheBrdfsRangeAreClampedAndTheSceneSaysSo) {
   // Disney's roughness 0 carried into ggx (minimum 0.001), and a colour past 0..1.

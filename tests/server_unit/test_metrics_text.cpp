@@ -1,4 +1,4 @@
-// GET /metrics' writer and counters (issue 14): the exposition format's rules that a scraper
+// GET /metrics' writer and counters: the exposition format's rules that a scraper
 // depends on, checked line by line; the topology test parses the real endpoint with a
 // Prometheus parser.
 #include <gtest/gtest.h>

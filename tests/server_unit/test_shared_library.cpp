@@ -1,4 +1,4 @@
-// Two replicas share one data folder (issue 14): a BRDF saved or deleted through one library is
+// Two replicas share one data folder: a BRDF saved or deleted through one library is
 // seen by the other's next lookup, with no restart.
 #include <gtest/gtest.h>
 

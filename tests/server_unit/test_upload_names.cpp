@@ -1,4 +1,4 @@
-// Names of uploads as other users see them (issue 12): the last path component, valid UTF-8,
+// Names of uploads as other users see them: the last path component, valid UTF-8,
 // without controls or the invisible format characters that reorder or hide text.
 #include <gtest/gtest.h>
 

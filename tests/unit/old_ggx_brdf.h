@@ -1,4 +1,4 @@
-// The GGX file as it was before issue 11 (git show 3f87277:shaders/brdfs/ggx.brdf), kept verbatim
+// The GGX file as it was before its sampler's frame was fixed (git show 3f87277:shaders/brdfs/ggx.brdf), kept verbatim
 // for the tests: its sampler builds the frame around N with the fallback tangent T = +x when
 // |N.z| >= 0.999, which is not orthogonal to N there (L is then not unit length and the pdf does
 // not describe the draws). The check at N = +z alone could not see it.

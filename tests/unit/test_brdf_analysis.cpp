@@ -1,4 +1,4 @@
-// Renderer::estimateAlbedo and evaluateBrdf on the real device (issue 13): the albedo
+// Renderer::estimateAlbedo and evaluateBrdf on the real device: the albedo
 // estimators against analytic truths, at every view including grazing ones.
 #include <gtest/gtest.h>
 

@@ -85,7 +85,7 @@ TEST_F(BrdfCheck, CatchesNaN) {
   EXPECT_NE(r.firstBadValue.find("all parameters at their defaults"), std::string::npos) << r.firstBadValue;
 }
 
-// Issue 13: Schlick's factor on the half vector, reciprocal by construction. L = -V on the
+// Schlick's factor on the half vector, reciprocal by construction. L = -V on the
 // horizon (H = 0/0), a configuration of measure zero that the integrator never meets, is left
 // out and counted apart. The issue's 18 NaN were not there, though: the report names them at
 // L = V exactly, where dot(H, L) rounds above 1 and pow() of the negative base is NaN (GLSL
@@ -144,7 +144,7 @@ TEST_F(BrdfCheck, CatchesEnergyGain) {
   EXPECT_NE(r.worstAlbedo.find("k = 1 (others at their defaults)"), std::string::npos) << r.worstAlbedo;
 }
 
-// Issue 13 item 4: `ok` means every claim holds; an unclaimed property is reported, never
+// `ok` means every claim holds; an unclaimed property is reported, never
 // failed, and a violated claim names its worst case.
 TEST_F(BrdfCheck, OkMeansEveryClaimHolds) {
   const std::string nonReciprocal = "return vec3(k + max(dot(N, V), 0.0)) / PI;";

@@ -79,7 +79,7 @@ TEST(BrdfParser, ParsesAllParameterTypes) {
   EXPECT_FALSE(d.hasSampler());
 }
 
-// Issue 13: what a file claims, in a comment line the Explorer's reader skips.
+// What a file claims, in a comment line the Explorer's reader skips.
 TEST(BrdfParser, ClaimsLine) {
   Result<BrdfDefinition> none = parseBrdf(kLambert);
   ASSERT_TRUE(none.ok());
@@ -145,7 +145,7 @@ TEST(BrdfParser, NoAnalyticLineAndExplorerCommentsInShader) {
 }
 
 TEST(BrdfParser, IncludeIsAnErrorOnItsLineNotADroppedComment) {
-  // Issue 12: '#include' used to be blanked as an Explorer '#' comment, without a word.
+  // '#include' used to be blanked as an Explorer '#' comment, without a word.
   for (const char* include : {"#include \"common.glsl\"", "  # include <lib.glsl>"})
     expectErrorAt(std::string("analytic\n::begin shader\n") + include +
                       "\nvec3 BRDF(vec3 L, vec3 V, vec3 N, vec3 X, vec3 Y) { return vec3(1); }\n::end shader\n",

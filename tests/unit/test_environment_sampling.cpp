@@ -1,4 +1,4 @@
-// The environment's importance-sampling distribution on the host (issue 11): what the device
+// The environment's importance-sampling distribution on the host: what the device
 // table holds, checked against direct integrals.
 #include <gtest/gtest.h>
 

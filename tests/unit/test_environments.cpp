@@ -447,7 +447,7 @@ TEST(EnvironmentEquirect, NegativeValuesAreClampedAndHugeOnesKept) {
   EnvironmentData fromExr = decodeOk(encodeExr(w, h, rgb, false));
   expectFiniteAndInRange(fromExr, 0.0f, 1e6f);
   EXPECT_GT(brightestTexel(fromExr).direction.y, 0.0f);
-  // Far above the half-float range (issue 11): the spot's energy must survive the cube.
+  // Far above the half-float range: the spot's energy must survive the cube.
   float brightest = 0;
   for (size_t i = 0; i < fromExr.texels.size(); i += 4) brightest = std::max(brightest, fromExr.texels[i]);
   EXPECT_GT(brightest, 65504.0f);

@@ -1,4 +1,4 @@
-// Issue 11 on the real device: environment importance sampling, MIS, full-range environments
+// On the real device: environment importance sampling, MIS, full-range environments
 // and the honesty of rel_error, each against an analytic truth or an independent reference.
 #include <gtest/gtest.h>
 

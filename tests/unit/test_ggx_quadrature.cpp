@@ -1,5 +1,5 @@
-// GGX rendered with its own sampler against an independent quadrature, pixel by pixel (issue 11
-// item 6). A GGX sphere (F0 = 1, so f = D G2 / (4 cos cos)) in the white furnace shows, at each
+// GGX rendered with its own sampler against an independent quadrature, pixel by pixel.
+// A GGX sphere (F0 = 1, so f = D G2 / (4 cos cos)) in the white furnace shows, at each
 // pixel, the directional albedo E(mu) of its view angle mu = N.V. The host computes E(mu) by a
 // deterministic quadrature that shares no code with ggx.brdf (over the NDF's own CDF, not the
 // visible normals the sampler draws), checks that quadrature against itself at twice the
@@ -220,7 +220,7 @@ TEST_F(GgxQuadrature, EverySpherePixelMatchesTheQuadratureWithin1Percent) {
   }
 }
 
-// The old sampler (before issue 11) and the fixed one where the old frame was wrong: a close-up
+// The old sampler (before its frame was fixed) and the fixed one where the old frame was wrong: a close-up
 // (fov 2 degrees, 16 x 16 pixels) of the sphere around its +z point, seen from 62 degrees off
 // the normal (camera at (2.12, 0, 2.12) aimed at (0, 0, 1)): normals up to a few degrees from
 // +z, most inside the old |N.z| >= 0.999 branch, at an oblique view. (At the image centre of the

@@ -1,4 +1,4 @@
-// The renderer's memory budget (issue 12 item 4): reservations within it, refusals past it that
+// The renderer's memory budget: reservations within it, refusals past it that
 // change nothing and say why, and the shrink step that drops what is optional first.
 #include <gtest/gtest.h>
 

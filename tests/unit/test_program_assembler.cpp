@@ -198,7 +198,7 @@ TEST_F(Assembly, FixedOrderAndLineDirectives) {
 }
 
 TEST_F(Assembly, MacrosOfTheBrdfEndWithItsText) {
-  // Issue 12: a BRDF's macros must not rewrite the integrator's code after it.
+  // A BRDF's macros must not rewrite the integrator's code after it.
   brdf.shader = "#define brdfa_accum evil\n  #  define  TWO 2.0\n#if 0\n#define HIDDEN 1\n#endif\n"
                 "vec3 BRDF(vec3 L, vec3 V, vec3 N, vec3 X, vec3 Y) { return vec3(TWO); }\n";
   AssembledProgram p = assembleProgram(spec);

@@ -214,7 +214,7 @@ std::string engineStyleFile(const std::string& before, const std::string& body) 
   return before + "vec3 render(vec3 L, vec3 N, vec3 V, vec2 textureCord, mat3 worldToLocal){\n\t" + body + "\n}\n";
 }
 
-// Issue 13: a file in the engine's style may use the PI and LI of the engine's host shader
+// A file in the engine's style may use the PI and LI of the engine's host shader
 // without defining them (`#define PI 3.14159265359`, `#define LI 8.`), and renders as the engine
 // rendered it: the plain average of render() over uniform directions.
 TEST_F(RendererPhysics, LegacyFileUsingTheEnginesPiAndLiRendersAsTheEngineWould) {

@@ -280,7 +280,7 @@ TEST_F(Samplers, APositivePdfBelowTheHorizonFails) {
   EXPECT_FALSE(r->passed());
 }
 
-// The GGX sampler before issue 11 built its frame with the fallback tangent +x wherever
+// The GGX sampler before its fix built its frame with the fallback tangent +x wherever
 // |N.z| >= 0.999: fine at N = +z exactly (the original check's only normal), wrong within 2.6
 // degrees of +-z. The extended check fails it there, and passes the fixed file.
 TEST_F(Samplers, TheOldGgxFrameFailsNearTheZAxisAndTheFixedOnePasses) {

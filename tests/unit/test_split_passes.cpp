@@ -1,4 +1,4 @@
-// Issue 12: a pass is split into bounded queue submissions (RendererOptions::submissionTargetMs)
+// A pass is split into bounded queue submissions (RendererOptions::submissionTargetMs)
 // and the queue is handed over in arrival order, so a heavy scene slows its own view, not the
 // others. The split must not change the image: tiles and sample sweeps add exactly the samples
 // of the unsplit pass, in another order.
@@ -132,7 +132,7 @@ TEST(SplitPasses, SplitRenderEqualsUnsplitRender) {
   }
 }
 
-// Issue 15: a scene change interrupts the pass in progress at its next submission
+// A scene change interrupts the pass in progress at its next submission
 // (RenderView::interruptPass). An interrupted pass counts no samples; the next renderPass()
 // completes it with the same samples, so a view interrupted in every pass renders the
 // uninterrupted image (to float rounding: the sweeps are cut elsewhere).
@@ -216,7 +216,7 @@ TEST(SplitPasses, InterruptedPassesCompleteToTheSameImage) {
   ASSERT_NO_FATAL_FAILURE(expectSameImage(again, reference));
 }
 
-// Issue 15: with RenderSettings::previewPass the first pass after a restart is a preview, one
+// With RenderSettings::previewPass the first pass after a restart is a preview, one
 // sample at one pixel of each 2x2 block shown in the whole block, counted nowhere; the first
 // real pass overwrites it, so the image after it (and every later one) is the image without a
 // preview. In the white furnace every object pixel of the preview is exactly 1.
@@ -358,7 +358,7 @@ TEST(SplitPasses, WhiteLambertInFurnaceIsOneWhenSplit) {
   EXPECT_EQ(f.rgba32f[0], 0.0f) << "hidden background must be black";
 }
 
-// Issue 15: a watched pass that outlasts its frame (renderPass(frameTargetMs)) returns at a
+// A watched pass that outlasts its frame (renderPass(frameTargetMs)) returns at a
 // submission boundary once the frame's time is spent, leaving the pass to the next call; a frame
 // read meanwhile shows the pass as far as it got without completing it. Every pixel's mean
 // divides by its own sample count, so in the furnace a white Lambertian is exactly 1 at every

@@ -1,4 +1,4 @@
-// Browser checks of the Analysis tab and the side-by-side view (issue 13, items 2 and 3), run by
+// Browser checks of the Analysis tab and the side-by-side view, run by
 // run.mjs after checks.mjs in a tab of their own. Screenshots: analysis-*.png, side-by-side*.png.
 import assert from 'node:assert/strict';
 import { createHash } from 'node:crypto';

@@ -1,4 +1,4 @@
-// Browser checks of the layout and the camera (issue 13 item 7), run by run.mjs after checks.mjs:
+// Browser checks of the layout and the camera, run by run.mjs after checks.mjs:
 // at 1024x700 and 1400x900, with ggx and with disney (the BRDF with the most parameters), no
 // two labels, readouts, controls or buttons of the Parameters panel overlap, and each is shown
 // whole inside the panel; orbit (the default camera) turns about the selected object and keeps

@@ -1,4 +1,4 @@
-// Browser tests of the UI (issue 5) in Debian's Chromium, driven by playwright-core, against
+// Browser tests of the UI in Debian's Chromium, driven by playwright-core, against
 // the real server binary. Registered in CTest as `web_ui` (tests/CMakeLists.txt):
 //   node tests/web/run.mjs --server build/server/brdfa-server --root . --artifacts build/web-artifacts
 // Rebuilds web/dist first (esbuild, ~0.1 s) so it always tests the current sources. Prints the

@@ -1,4 +1,4 @@
-// Scene assets the renderer can load from files: meshes, textures and environments (issue 4).
+// Scene assets the renderer can load from files: meshes, textures and environments.
 // No Vulkan and no HTTP here: the server validates uploads with inspectAsset() before it
 // stores them, then names the stored file to the renderer with Renderer::registerAsset().
 #pragma once

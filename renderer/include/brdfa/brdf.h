@@ -27,7 +27,7 @@ struct BrdfParam {
 
 enum class BrdfFormat { Explorer, Legacy };
 
-// What a file states about its BRDF, checked by Renderer::checkBrdf (issue 13). Declared by a
+// What a file states about its BRDF, checked by Renderer::checkBrdf. Declared by a
 // comment line outside the sections, which the Explorer's reader skips like any comment:
 //   # claims: reciprocity, energy-conservation, non-negativity
 // (names separated by commas or spaces; "none" claims nothing). A property not claimed is

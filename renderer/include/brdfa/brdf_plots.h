@@ -1,4 +1,4 @@
-// The Analysis tab's plots of a BRDF (issue 13; the curves of Disney's BRDF Explorer), built
+// The Analysis tab's plots of a BRDF (the curves of Disney's BRDF Explorer), built
 // from Renderer::evaluateBrdf and Renderer::estimateAlbedo. No HTTP here: the server turns a
 // Plot into JSON or CSV.
 //

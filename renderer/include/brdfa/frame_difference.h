@@ -1,4 +1,4 @@
-// The signed difference of two renders of one view (issue 13 item 3: two BRDFs, or two
+// The signed difference of two renders of one view (the side-by-side view: two BRDFs, or two
 // parameter sets, under the same camera and environment), with its relative RMS and the error
 // bar that both images' own noise gives it. Host-only: no device work.
 #pragma once

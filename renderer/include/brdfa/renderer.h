@@ -27,7 +27,7 @@ struct RendererOptions {
   bool validation = false; // enable VK_LAYER_KHRONOS_validation when present
   ResolveMode resolve = ResolveMode::Auto;
   // Device time one queue submission of a pass aims at: a pass is split into submissions of
-  // about this length, so a heavy scene cannot hold the shared queue for long (issue 12).
+  // about this length, so a heavy scene cannot hold the shared queue for long.
   // 0: one submission per pass.
   double submissionTargetMs = 50;
   // The target while no other view has used the queue in the last half second: then nobody
@@ -45,7 +45,7 @@ struct RendererOptions {
   // is already set) before the device opens; empty leaves the driver's default.
   std::string driverCacheDir;
   // GLSL is compiled in brdfa-compile-worker processes, each compile under this budget; past
-  // it the compile fails with a CompileError naming the budget (issue 12).
+  // it the compile fails with a CompileError naming the budget.
   double compileSeconds = 5.0;
   size_t compileMemoryMiB = 1024;  // RSS of one compile worker (MemoryUse::Compiles counts them at it)
   size_t compileWorkers = 0;  // at once; 0: one per core, at least 2
@@ -58,7 +58,7 @@ struct RendererOptions {
   uint64_t memoryBudgetBytes = 0;
   std::string memoryBudgetLabel;  // names the budget in OverBudget messages (MemoryLedger)
   unsigned spareProcesses = 0;
-  // Isolation (issue 12): the device lives in a supervised brdfa-render-worker process. A
+  // Isolation: the device lives in a supervised brdfa-render-worker process. A
   // pipeline build past buildSeconds, one queue submission of a pass or frame read past
   // passSeconds (passes are split into submissions of ~50 ms; a program's first submission also
   // carries the driver's compile on lavapipe, ~0.6 s for Disney's BRDF), one submission of a
@@ -267,7 +267,7 @@ struct ClaimVerdict {
   std::string measured;  // the figure and its worst case, for a person
 };
 
-// Numeric checks of one BRDF on the device (issue 3 item 6; issue 13), through a compute
+// Numeric checks of one BRDF on the device, through a compute
 // kernel that evaluates the same BRDF() code the renderer shades with. Directions: a grid over
 // view and light polar angles up to 89.9 degrees and exactly 90, and azimuths (L = -V on the
 // horizon, where the half vector is 0/0, is left out and counted); parameters: every parameter
@@ -303,7 +303,7 @@ struct BrdfCheckReport {
   }
 };
 
-// Checks of a file's sampleBRDF() (issue 3; issue 11: in many frames and views), at default
+// Checks of a file's sampleBRDF() (in many frames and views), at default
 // parameters, in every configuration of SamplerCheckConfig below (samplesPerConfiguration each).
 // Always run, using only what must hold if the reported pdf is the density of the samples: over
 // 128 cells of equal solid angle, the mean of 1_cell / pdf equals the cell's solid angle
@@ -379,7 +379,7 @@ struct SamplerCheckReport {
   }
 };
 
-// Checks of the environment sampler (issue 11) on the device, over 2^20 independent draws:
+// Checks of the environment sampler on the device, over 2^20 independent draws:
 //  - the cells drawn against the probabilities the alias table realises (Pearson chi-square over
 //    blocks of 4 x 4 cells, small blocks pooled), and the positions inside the cells against
 //    uniform (chi-square over 8 x 8 sub-cells): together, the draws follow the distribution;
@@ -407,7 +407,7 @@ struct EnvironmentSamplerReport {
   }
 };
 
-// Analysis of one BRDF on the device (issue 13): the file's own compiled BRDF() (legacy
+// Analysis of one BRDF on the device: the file's own compiled BRDF() (legacy
 // render() files are Unsupported), in the frame N = +z, X = +x, Y = +y. A setting maps
 // parameter names to values; names it leaves out take the file's defaults.
 using ParamSetting = std::map<std::string, Vec3>;

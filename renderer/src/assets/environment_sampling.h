@@ -1,4 +1,4 @@
-// Importance sampling of an environment cube map (issue 11): a piecewise-constant distribution
+// Importance sampling of an environment cube map: a piecewise-constant distribution
 // over cells of the cube's faces, in proportion to each cell's luminance times its solid
 // angle, drawn on the device in O(1) by Walker's alias method (Vose's construction; as in
 // pbrt-v4's AliasTable). Built once per environment and kept with it.

@@ -1,4 +1,4 @@
-// One memory budget for everything the renderer holds (issue 12 item 4): what each use takes is
+// One memory budget for everything the renderer holds: what each use takes is
 // reserved here before it is allocated, and a reservation that would pass the budget first
 // asks the renderer to drop what is optional (unused cached programs and assets), then fails
 // with OverBudget naming what asked and what is left. No Vulkan here.

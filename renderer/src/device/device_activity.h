@@ -1,5 +1,5 @@
 // Device work in flight, by the request it serves: what a watchdog needs to tell which request
-// holds the device (issue 12). The render worker tags each request's thread; the renderer
+// holds the device. The render worker tags each request's thread; the renderer
 // opens a Scope around every queue submission (until its fence signals) and every pipeline
 // build (the driver's shader compile). The queue runs submissions in order, so the oldest
 // submission in flight is the one running or the one every later submission waits behind.

@@ -135,7 +135,7 @@ class RemoteView : public RenderView {
   void interruptPass() override;
 
  private:
-  // Makes the view exist in the current worker, with its last scene (issue 12's restore).
+  // Makes the view exist in the current worker, with its last scene (restored after a worker is replaced).
   Result<void> ensureRemote();
   Result<wire::Message> viewCall(json head, Budget budget, const ScenePrograms& programs);
 

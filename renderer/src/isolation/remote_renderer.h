@@ -1,4 +1,4 @@
-// The isolated renderer (RendererOptions::isolate, issue 12): a Renderer whose device lives in
+// The isolated renderer (RendererOptions::isolate): a Renderer whose device lives in
 // a brdfa-render-worker process under a watchdog.
 //  - The worker reports the request whose pipeline build or queue submission overran its
 //    budget, or that was in flight when its memory passed the limit (device_activity.h); the

@@ -1,4 +1,4 @@
-// GLSL compilation of user text in worker processes (issue 12): a pool of
+// GLSL compilation of user text in worker processes: a pool of
 // brdfa-compile-worker processes, each compiling one program at a time under a wall-clock and a
 // memory budget. A program past either budget has its worker killed (and later replaced), and
 // its compile fails with a CompileError that names the budget; no other compile waits behind

@@ -1,4 +1,4 @@
-// What a compiled program declares, read from its SPIR-V (issue 12): a BRDF file's text is
+// What a compiled program declares, read from its SPIR-V: a BRDF file's text is
 // compiled into the integrator's program, and must not add resources of its own. Checking the
 // compiled module, not the spelling, catches every way of writing them (macros included).
 #pragma once

@@ -1,4 +1,4 @@
-// Uploaded scene assets (issue 4): meshes (OBJ), textures (PNG, JPEG) and environments (HDR,
+// Uploaded scene assets: meshes (OBJ), textures (PNG, JPEG) and environments (HDR,
 // EXR, PNG/JPEG cross cube maps), kept in <dataDir>/assets as `<id>.<ext>` plus `<id>.json`
 // (the metadata), and the read-only Blender worlds found in the environment folders.
 //

@@ -51,19 +51,19 @@ struct ServerConfig {
   uint64_t maxAssetsBytes = 4ull << 30;       // --max-assets-bytes: all stored upload files together
   int compileTimeoutSec = 5;                  // --compile-timeout: one GLSL compile's wall clock
   int compileMemoryMiB = 0;                   // --compile-memory: one GLSL compile's memory; 0: --max-memory / 16, in 64..1024
-  // The render worker's watchdog (issue 12, remote_renderer.h); --in-process turns it off.
+  // The render worker's watchdog (remote_renderer.h); --in-process turns it off.
   double buildBudgetSec = 10;                 // --build-budget: one pipeline build
   double passBudgetSec = 1.5;                 // --pass-budget: one queue submission of a pass
   double checkBudgetSec = 120;                // --check-budget: one submission of a BRDF check
   bool inProcess = false;                     // --in-process: no render worker
   uint64_t maxMemoryMiB = 0;                  // --max-memory: all sessions' render targets; 0: half the RAM
-  // Slow or greedy clients (issue 12): see ConnectionLimits in connection_guard.h.
+  // Slow or greedy clients: see ConnectionLimits in connection_guard.h.
   int maxConnectionsPerAddress = 32;          // --max-connections-per-address: open at once
   int requestReadTimeoutSec = 10;             // --request-read-timeout: to receive one request
   // --environment-dir (repeatable): folders whose *.exr become read-only environments
   // `blender_<stem>`. Unset: Debian blender-data's studio-light worlds, when installed.
   std::optional<std::vector<std::string>> environmentDirs;
-  // Several replicas behind one balancer (issue 14, docs/deploy.md). --replica (else
+  // Several replicas behind one balancer (docs/deploy.md). --replica (else
   // $BRDFA_REPLICA): this server's tag, [a-z0-9-] as a Kubernetes pod name; session and job ids
   // become <tag>.<id> so the balancer can route by path, and every response says X-Brdfa-Replica.
   std::string replica;

@@ -1,4 +1,4 @@
-// What the HTTP front needs and cpp-httplib 0.11 lacks (issue 12): a deadline for receiving
+// What the HTTP front needs and cpp-httplib 0.11 lacks: a deadline for receiving
 // each request, a cap on open connections per client address, and a way for a long handler to
 // see that its client went away. httplib's own read timeout applies per recv(), so a client
 // trickling a byte a second never trips it and keeps a worker thread for as long as it likes.

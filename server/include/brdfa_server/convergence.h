@@ -1,4 +1,4 @@
-// Error against time (issue 11): the series a session records since its last accumulation
+// Error against time: the series a session records since its last accumulation
 // restart, and the straight-line fit in log-log space that GET .../convergence reports.
 //
 // Monte Carlo error falls as 1/sqrt(N), so with a steady pass rate log(rel_error) against

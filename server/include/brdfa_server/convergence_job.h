@@ -1,4 +1,4 @@
-// POST /api/jobs/convergence (issue 11): one scene rendered with several sampling modes for
+// POST /api/jobs/convergence: one scene rendered with several sampling modes for
 // equal render time each, against a shared long reference, giving error-vs-time curves and
 // equal-time relMSE ratios.
 //

@@ -2,7 +2,7 @@
 // - batch tests (the thesis's Test Window): compile and numerically check many BRDFs on a small
 //   worker pool of its own, one BRDF per task;
 // - jobs that run as one piece with progress and cancellation (the convergence comparison of
-//   issue 11), one at a time on a worker of their own: they measure time, so two at once would
+//   sampling modes), one at a time on a worker of their own: they measure time, so two at once would
 //   distort each other, and a long one never holds up the batch tests.
 #pragma once
 

@@ -1,4 +1,4 @@
-// The service's own figures for GET /metrics (issue 14): what the routes and sessions count as
+// The service's own figures for GET /metrics: what the routes and sessions count as
 // they work. The exposition (Prometheus text format) is prometheus_text.h; the route gathers
 // these with the renderer's counters and the live gauges (sessions, streams, memory).
 #pragma once
