@@ -6,7 +6,9 @@
 // from one cosine-weighted direction (cos / pdf = pi) over the coarse environment of
 // lib/environment_preview.glsl (the same integral, its lights spread over a coarse cell, so the
 // sharpest highlights blur), at one pixel of each 2x2 block, written to the block's pixels this
-// object covers, as a preview by the program is (half A the sample, half B none).
+// object covers, as a preview by the program is (half A the sample, half B none). A first sample
+// (RenderSettings::firstSampleKernel) is the same at every pixel over the exact environment: a
+// 1-sample estimate of the image, replaced by the first pass of the scene's own program.
 //
 // In three dispatches of one grid, so that the BRDF's own program is as small as it can be
 // (its driver compile is the cost this exists to cut; every line around the BRDF call added

@@ -1,6 +1,7 @@
 // Stage 3 of 3 of the preview kernel (kernels/preview.comp.glsl): writes each block's value to
-// the block's pixels this object covers, both halves overwritten (half A: the sample, half B:
-// none), as a preview by the program would. A fixed program, so a new BRDF's driver compile
+// the block's pixels this object covers (a first sample's mask is its one pixel), both halves
+// overwritten (half A: the sample, half B: none), as a preview or first pass by the program
+// would. A fixed program, so a new BRDF's driver compile
 // leaves out these stores.
 
 layout(local_size_x = 8, local_size_y = 8, local_size_z = 1) in;

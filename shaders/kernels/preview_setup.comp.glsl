@@ -1,5 +1,7 @@
 // Stage 1 of 3 of the preview kernel (kernels/preview.comp.glsl says why it exists): everything
-// of one sample at one pixel of each 2x2 block that does not depend on the BRDF. A fixed
+// of one sample that does not depend on the BRDF, at one pixel of each 2x2 block for a preview
+// (target.w bit 1), else at every pixel for a first sample (RenderSettings::firstSampleKernel,
+// over the exact environment: an estimate that counts as the image's sample 1). A fixed
 // program, compiled once per environment kind, so a new BRDF's driver compile (lavapipe JITs
 // at the first dispatch) leaves all this out: its frame, sample direction and coarse
 // environment lookup alone took ~60 ms of that compile.
@@ -16,11 +18,12 @@ layout(local_size_x = 8, local_size_y = 8, local_size_z = 1) in;
 
 void main() {
   uint slot = brdfa_previewSlot();
+  bool blocks = (brdfa_pc.target.w & 2u) != 0u;  // a preview; else a first sample per pixel
   // The block's pixels of this object, and the first of them, which is shaded (as a preview by
-  // the program picks them, kernels/shade.comp.glsl).
+  // the program picks them, kernels/shade.comp.glsl); or this invocation's pixel (mask 1).
   uvec2 base, p, surface;
   uint mask;
-  if (!brdfa_shadedPixel(true, base, mask, p, surface)) mask = 0u;
+  if (!brdfa_shadedPixel(blocks, base, mask, p, surface)) mask = 0u;
   brdfa_previewScratch[slot + 2u].w = mask;
   if (mask == 0u) return;
   vec3 N, V, X, Y;
@@ -31,7 +34,10 @@ void main() {
   float weight;
   vec3 l = brdfa_sampleCosineHemisphere(brdfa_unorm2(u.xy), weight);
   vec3 L = X * l.x + Y * l.y + N * l.z;
-  vec3 incoming = brdfa_environmentPreview(L) * (weight * brdfa_environmentIntensity());
+  // A first sample is the image's own estimate, so it reads the environment itself; a preview
+  // reads the coarse one, less noisy for one sample per block.
+  vec3 radiance = blocks ? brdfa_environmentPreview(L) : brdfa_environmentUnit(L);
+  vec3 incoming = radiance * (weight * brdfa_environmentIntensity());
   brdfa_previewScratch[slot] = uvec4(floatBitsToUint(N), floatBitsToUint(texCoord.x));
   brdfa_previewScratch[slot + 1u] = uvec4(floatBitsToUint(V), floatBitsToUint(texCoord.y));
   brdfa_previewScratch[slot + 2u].xyz = floatBitsToUint(X);

@@ -238,6 +238,112 @@ TEST(PreviewKernel, ItsPreviewAtRoughnessExtremesIsFiniteAndLit) {
   }
 }
 
+// A first sample (RenderSettings::firstSampleKernel): a new program's first frame is one cosine
+// sample per pixel by the preview kernel over the exact environment, counted as spp 1 while
+// provisional, and the programs' first pass replaces it. In the furnace a white Lambertian's
+// first sample is exactly 1 at every object pixel, also when read as a frame (a read must not
+// clear it); with max_samples 1 the view is not done until the program's own sample replaced
+// it; and the image that follows is the same as without a first sample.
+TEST(PreviewKernel, AFirstSampleIsExactInTheFurnaceAndIsReplaced) {
+  auto renderer = freshRenderer();
+  ASSERT_TRUE(renderer);
+  if (!cpuDevice(*renderer)) GTEST_SKIP() << "a GPU compiles at pipeline creation: no preview kernel";
+  for (int maxSamples : {1, 24}) {
+    SCOPED_TRACE("max_samples " + std::to_string(maxSamples));
+    std::string text = kWhiteLambert;
+    text.insert(text.find("::end shader"), "// first sample " + std::to_string(maxSamples) + "\n");
+    Scene scene = sphereScene(inlineBrdf(text), "furnace", maxSamples);
+    scene.render.firstSampleKernel = true;
+    const uint64_t before = renderer->counters().pipelinesCreated;
+    std::unique_ptr<RenderView> view = viewWithScene(*renderer, scene);
+    ASSERT_TRUE(view);
+    ASSERT_EQ(renderer->counters().pipelinesCreated, before + 2) << "a new program and its preview kernel";
+    auto first = view->renderPass();
+    ASSERT_TRUE(first.ok());
+    EXPECT_FALSE(first->preview);
+    EXPECT_TRUE(first->provisional);
+    EXPECT_EQ(first->spp, 1u);
+    EXPECT_EQ(first->passes, 0u);
+    EXPECT_FALSE(first->done()) << "the program's own samples are still to come";
+    auto frame = view->readFrame(true);
+    ASSERT_TRUE(frame.ok());
+    EXPECT_EQ(frame->stats.spp, 1u);
+    auto second = view->renderPass();
+    ASSERT_TRUE(second.ok());
+    EXPECT_FALSE(second->provisional);
+    EXPECT_EQ(second->passes, 1u);
+    EXPECT_EQ(second->spp, 1u) << "the program's first pass replaced the first sample";
+    const Frame last = renderUntilDone(*view);
+
+    Scene plainScene = scene;
+    plainScene.render.firstSampleKernel = false;
+    std::unique_ptr<RenderView> plain = viewWithScene(*renderer, plainScene);
+    ASSERT_TRUE(plain);
+    const Frame reference = renderUntilDone(*plain);
+    ASSERT_EQ(last.rgba32f.size(), reference.rgba32f.size());
+    size_t ones = 0;
+    for (size_t i = 0; i < reference.rgba32f.size(); ++i)
+      ASSERT_NEAR(last.rgba32f[i], reference.rgba32f[i], 1e-5f * std::max(1.0f, std::abs(reference.rgba32f[i])))
+          << "value " << i;
+    for (size_t i = 0; i < reference.rgba32f.size(); i += 4) {
+      if (std::abs(reference.rgba32f[i] - 1.0f) > 1e-5f) continue;
+      ++ones;
+      for (int c = 0; c < 3; ++c) ASSERT_NEAR(frame->rgba32f[i + c], 1.0f, 1e-5f) << "pixel " << i / 4;
+    }
+    EXPECT_GT(ones, 20000u);
+  }
+}
+
+// Under the sky (a sun far above 1) first samples are unbiased 1-sample estimates of the
+// image: the mean over the sphere of the first samples of new programs is the converged
+// image's, and at GGX's roughness extremes every value is finite and non-negative. Near a
+// mirror (roughness 0.001) a cosine direction meets the lobe about once in 10^6 draws, so the
+// mean of a few frames says nothing there: only finiteness is asserted.
+TEST(PreviewKernel, FirstSamplesUnderTheSkyHaveTheConvergedLevel) {
+  auto renderer = freshRenderer();
+  ASSERT_TRUE(renderer);
+  if (!cpuDevice(*renderer)) GTEST_SKIP() << "a GPU compiles at pipeline creation: no preview kernel";
+  const std::string text = readSourceFile("shaders/brdfs/ggx.brdf");
+  for (float roughness : {0.001f, 0.3f, 1.0f}) {
+    SCOPED_TRACE("roughness " + std::to_string(roughness));
+    Scene base = sphereScene(inlineBrdf(text), "sky", 512);
+    base.render.previewPass = false;
+    base.objects[0].params["roughness"] = {roughness, 0, 0};
+    std::unique_ptr<RenderView> reference = viewWithScene(*renderer, base);
+    ASSERT_TRUE(reference);
+    const Frame converged = renderUntilDone(*reference);
+    double convergedSum = 0;
+    for (size_t i = 0; i < converged.rgba32f.size(); i += 4)
+      for (int c = 0; c < 3; ++c) convergedSum += converged.rgba32f[i + c];
+    constexpr int kFirsts = 8;
+    double firstSum = 0;
+    for (int k = 0; k < kFirsts; ++k) {
+      std::string edited = text;
+      edited.insert(edited.find("::end shader"),
+                    "// first " + std::to_string(k) + " " + std::to_string(roughness) + "\n");
+      Scene scene = base;
+      scene.objects[0].brdf = inlineBrdf(edited);
+      scene.render.firstSampleKernel = true;
+      scene.render.seed = 2000 + k;
+      std::unique_ptr<RenderView> view = viewWithScene(*renderer, scene);
+      ASSERT_TRUE(view);
+      auto pass = view->renderPass();
+      ASSERT_TRUE(pass.ok() && pass->provisional);
+      auto frame = view->readFrame(true);
+      ASSERT_TRUE(frame.ok());
+      for (size_t i = 0; i < frame->rgba32f.size(); i += 4)
+        for (int c = 0; c < 3; ++c) {
+          const float v = frame->rgba32f[i + c];
+          ASSERT_TRUE(std::isfinite(v) && v >= 0.0f) << "pixel " << i / 4;
+          firstSum += v;
+        }
+    }
+    std::printf("ggx %.3f: mean of %d first samples / converged = %.4f\n", roughness, kFirsts,
+                firstSum / kFirsts / convergedSum);
+    if (roughness > 0.01f) EXPECT_NEAR(firstSum / kFirsts / convergedSum, 1.0, 0.06);
+  }
+}
+
 // Per cell the solid-angle-weighted mean radiance, divided by the cube's scale, in half floats:
 // the cells times their solid angles hold the map's integral, a bright texel's energy included.
 TEST(EnvironmentPreview, CellsHoldTheMapsIntegralAtTheCubesScale) {

@@ -135,6 +135,9 @@ struct FrameStats {
   // The image is a preview (RenderSettings::previewPass): no pass since the last restart
   // yet, spp 0, but a frame read shows one sample per 2x2 block of pixels.
   bool preview = false;
+  // spp is 1, taken by the preview kernel (RenderSettings::firstSampleKernel); the next pass
+  // replaces that sample, and spp counts from it. Never done while provisional.
+  bool provisional = false;
   // The latest renderPass returned partway through its pass, at its frame target (renderPass):
   // a frame read now shows the pass's samples where it has been. spp counts the pass once done.
   bool passInProgress = false;

@@ -71,6 +71,14 @@ struct RenderSettings {
   // alone changes nothing in the image.
   bool previewPass = false;
   static constexpr uint64_t kPreviewMinPixels = 256 * 256;
+  // Not part of the scene JSON either. On a device that compiles a program at its first
+  // dispatch (lavapipe), the first pass after a restart whose programs have not run yet takes
+  // one sample per pixel by the small preview kernel (cosine directions, the exact
+  // environment) instead of waiting for the programs' compile: a 1-sample estimate of the
+  // image (FrameStats::provisional), in place of a preview. The first pass by the programs
+  // replaces it, and the sample count starts again from that pass: the scene's own estimator
+  // alone makes the image that converges.
+  bool firstSampleKernel = false;
 };
 
 // One texture slot of an object (iTexture0..3 in order). `name` is a built-in texture or an

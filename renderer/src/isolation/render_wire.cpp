@@ -14,7 +14,7 @@ NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(ClaimVerdict, name, claimed, holds, measured)
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(Camera, position, yaw, pitch, fov)
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(EnvironmentSettings, name, intensity, rotation, visible)
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(RenderSettings, width, height, samplesPerFrame, maxSamples, sampling, targetError,
-                                   seed, exposure, toneMap, previewPass)
+                                   seed, exposure, toneMap, previewPass, firstSampleKernel)
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(TextureBinding, name, srgb)
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(DeviceInfo, name, type, driver, apiVersion)
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(CompileInfo, warnings, compileMs, cached)
@@ -177,6 +177,7 @@ json toJson(const FrameStats& f) {
               {"submissions", f.submissions},
               {"maxSubmissionMs", f.maxSubmissionMs},
               {"preview", f.preview},
+              {"provisional", f.provisional},
               {"passInProgress", f.passInProgress},
               {"breakdown", json::array({f.breakdown.setupMs, f.breakdown.shadeMs, f.breakdown.edgeMs,
                                          f.breakdown.resolveMs, f.breakdown.otherMs})}};
@@ -205,6 +206,7 @@ FrameStats statsFromJson(const json& j) {
   j.at("submissions").get_to(f.submissions);
   j.at("maxSubmissionMs").get_to(f.maxSubmissionMs);
   j.at("preview").get_to(f.preview);
+  j.at("provisional").get_to(f.provisional);
   j.at("passInProgress").get_to(f.passInProgress);
   const json& b = j.at("breakdown");
   if (!b.is_array() || b.size() != 5) throw json::type_error::create(302, "breakdown: 5 numbers expected", &b);

@@ -51,6 +51,9 @@ bool wantsPreview(const RenderSettings& render) {
   return render.previewPass && uint64_t(render.width) * render.height >= RenderSettings::kPreviewMinPixels;
 }
 
+// A program not yet run may want the preview kernel: for a preview, or a first sample.
+bool wantsPreviewKernel(const RenderSettings& render) { return wantsPreview(render) || render.firstSampleKernel; }
+
 uint32_t groups(uint32_t n, uint32_t size) { return (n + size - 1) / size; }
 
 double msSince(std::chrono::steady_clock::time_point t0) {
@@ -145,14 +148,16 @@ Result<void> RenderViewImpl::resize(uint32_t width, uint32_t height) {
     return makeError(ErrorCode::InvalidArgument, "a " + std::to_string(width) + "x" + std::to_string(height) +
                                                      " view is more than this device's texel buffers can address");
   const VkDeviceSize detailOffset = aligned(pixels * kGbufferSurfaceBytes);
-  // A preview dispatch over the whole image needs one scratch block per invocation. Only a
-  // device that compiles at the first dispatch runs the preview kernel; elsewhere one block
-  // keeps the binding valid.
+  // A preview-kernel dispatch needs one scratch block per invocation: per 2x2 block in a
+  // preview, per pixel in a first sample. At most kPreviewScratchBlocks, more only where one
+  // row of the first sample's workgroups needs it (dispatches take whole rows while one fits).
+  // Only a device that compiles at the first dispatch runs the preview kernel; elsewhere one
+  // block keeps the binding valid.
+  const uint32_t rowBlocks = groups(width, kShadeGroup) * kShadeGroup * kShadeGroup;
   const uint32_t scratchBlocks =
       !r_->compilesAtFirstDispatch()
           ? 1u
-          : std::min<uint32_t>(kPreviewScratchBlocks, groups((width + 1) / 2, kShadeGroup) *
-                                                          groups((height + 1) / 2, kShadeGroup) * kShadeGroup * kShadeGroup);
+          : std::min<uint32_t>(std::max(kPreviewScratchBlocks, rowBlocks), groups(height, kShadeGroup) * rowBlocks);
   const VkDeviceSize stride = aligned(detailOffset + pixels * kGbufferDetailBytes);
   const uint64_t bytes = pixels * (kGbufferSurfaceBytes + kGbufferDetailBytes + 4)  // raster targets and depth
                          + stride * jitter + pixels * 32      // G-buffer copies, accumulators
@@ -301,7 +306,7 @@ std::vector<std::optional<RendererImpl::ShadeKernels>> RenderViewImpl::prebuildK
   for (size_t i = 0; i < scene.objects.size(); ++i) {
     const SceneObject& so = scene.objects[i];
     auto kernels = r_->shadeKernels(*so.brdf, shadeVariant(*so.brdf, scene.render.sampling, constantEnv), constantEnv,
-                                    wantsPreview(scene.render));
+                                    wantsPreviewKernel(scene.render));
     if (kernels) built[i] = kernels.value();  // else buildObjects asks again and reports it
   }
   return built;
@@ -326,7 +331,7 @@ Result<std::vector<RenderViewImpl::ObjectState>> RenderViewImpl::buildObjects(
     // fraction of that, and compiles in the first pass.
     auto kernels = i < prebuilt.size() && prebuilt[i]
                        ? Result<RendererImpl::ShadeKernels>(*prebuilt[i])
-                       : r_->shadeKernels(*so.brdf, o.variant, constantEnv, wantsPreview(scene.render));
+                       : r_->shadeKernels(*so.brdf, o.variant, constantEnv, wantsPreviewKernel(scene.render));
     if (!kernels) {
       Error e = kernels.takeError();
       if (e.field.empty()) e.field = at + ".brdf";
@@ -496,7 +501,10 @@ Result<void> RenderViewImpl::setScene(const Scene& scene) {
   if (restart) {
     partial_.reset();  // its samples are of the old image
     sizer_.reset();    // the costs of what is drawn now are unmeasured
-    previewPending_ = wantsPreview(scene.render);
+    firstSamplePending_ = false;
+    for (const ObjectState& o : objects_)
+      firstSamplePending_ |= scene.render.firstSampleKernel && o.previewKernel && !o.kernel->dispatched;
+    previewPending_ = wantsPreview(scene.render) && !firstSamplePending_;  // a first sample shows sooner
     const uint64_t version = stats_.sceneVersion;
     stats_ = FrameStats{};
     stats_.sceneVersion = version;
@@ -536,7 +544,8 @@ Result<void> RenderViewImpl::setScene(const Scene& scene) {
 }
 
 void RenderViewImpl::updateDone() {
-  stats_.maxSamplesReached = stats_.spp >= static_cast<uint64_t>(scene_.render.maxSamples);
+  // A provisional sample is replaced by the next pass, which must run.
+  stats_.maxSamplesReached = !stats_.provisional && stats_.spp >= static_cast<uint64_t>(scene_.render.maxSamples);
   // Below kMinSppForTarget the estimate rests on too few samples per half: a rare bright
   // direction (the sun) that neither half has met yet would read as no error at all.
   const double target = scene_.render.targetError;
@@ -778,6 +787,12 @@ Result<FrameStats> RenderViewImpl::passLocked(bool interruptible, double frameTa
   const auto t0 = std::chrono::steady_clock::now();
   const std::optional<PartialPass> resumed = std::move(partial_);
   partial_.reset();
+  // The first pass by the programs replaces a first sample (RenderSettings::firstSampleKernel):
+  // it overwrites (passes is still 0), and the count starts again from it.
+  if (stats_.provisional) {
+    stats_.spp = 0;
+    stats_.provisional = false;
+  }
   // Between passes only, so that how a pass is split into submissions never changes the image.
   if (!resumed && !edgeListKnown_) listEdgePixels();
   // Passes after a restart ramp up 1, 2, 4, ... samples to samples_per_frame, so the first
@@ -787,12 +802,15 @@ Result<FrameStats> RenderViewImpl::passLocked(bool interruptible, double frameTa
   // block, over workgroups of 16x16 pixels: `scale` 2; by the program, or by the preview
   // kernel where the program has not run yet (buildObjects).
   const bool preview = previewPending_;
+  // A first sample (RenderSettings::firstSampleKernel): one sample per pixel, by the preview
+  // kernel where a program has not run yet.
+  const bool firstSample = firstSamplePending_ && !resumed;
   const uint32_t scale = preview ? 2 : 1;
-  uint32_t count = preview ? 1
+  uint32_t count = preview || firstSample ? 1
                    : resumed ? resumed->count
                              : static_cast<uint32_t>(std::min<uint64_t>(
                                    {static_cast<uint64_t>(scene_.render.samplesPerFrame), ramp, maxSamples - stats_.spp}));
-  if (frameTargetMs > 0 && !preview && !resumed) count = sizer_.fit(frameTargetMs, count);
+  if (frameTargetMs > 0 && !preview && !firstSample && !resumed) count = sizer_.fit(frameTargetMs, count);
   const uint32_t slice = resumed ? resumed->slice : sliceForPass(stats_.passes);
   const bool firstPass = stats_.passes == 0;
   // Refresh the error estimate in the last submission when it is due (and a second half exists).
@@ -808,7 +826,7 @@ Result<FrameStats> RenderViewImpl::passLocked(bool interruptible, double frameTa
   // Objects whose preview comes from the preview kernel (buildObjects).
   std::vector<bool> byPreviewKernel(objects_.size(), false);
   bool previewKernelPass = false;
-  for (size_t i = 0; preview && i < objects_.size(); ++i)
+  for (size_t i = 0; (preview || firstSample) && i < objects_.size(); ++i)
     previewKernelPass |= byPreviewKernel[i] = objects_[i].previewKernel && !objects_[i].kernel->dispatched;
 
   // Cost in units: one per sample of a covered pixel. An invocation off the object costs next
@@ -1040,9 +1058,10 @@ Result<FrameStats> RenderViewImpl::passLocked(bool interruptible, double frameTa
       msPerUnit_ = std::max(ms / units, floor);
     }
     maxUnits_ = std::max(maxUnits_, units);
-    // A preview is not interrupted: it is short, and under changes coming faster than it
-    // (a camera dragged), interrupting it would leave nothing to show at all.
-    const bool interrupted = done < count && interruptible && !preview && interruptRequested_.exchange(false);
+    // A preview or first sample is not interrupted: it is short, and under changes coming
+    // faster than it (a camera dragged), interrupting it would leave nothing to show at all.
+    const bool interrupted =
+        done < count && interruptible && !preview && !firstSample && interruptRequested_.exchange(false);
     // At the frame target: the next submission (about as long as this one) would pass it.
     const bool frameSpent = done < count && sliced && msSince(t0) + ms > frameTargetMs;
     if (interrupted || frameSpent) {
@@ -1081,6 +1100,23 @@ Result<FrameStats> RenderViewImpl::passLocked(bool interruptible, double frameTa
     return stats_;
   }
   stats_.preview = false;
+  if (firstSample) {
+    // Not a pass (passes stays 0): the next one, by the programs, overwrites it. What was
+    // learned is the preview kernel's cost, as after a preview by it.
+    firstSamplePending_ = false;
+    msPerUnit_ = priorMsPerUnit_ = maxUnits_ = 0;
+    warmUp_ = true;
+    for (ObjectState& o : objects_) o.previewKernel.reset();
+    stats_.spp = count;
+    stats_.provisional = true;
+    stats_.elapsedMs += segmentMs;
+    stats_.lastPassMs = passMs;
+    stats_.submissions = submissions;
+    stats_.maxSubmissionMs = maxSubmissionMs;
+    stats_.nanSamples = *static_cast<const uint32_t*>(counters_.mapped());
+    stats_.breakdown = breakdown;
+    return stats_;
+  }
   // The first passes after a restart carry the restart's work or are split into short
   // submissions (kInteractivePasses): their times would read as a large fixed part.
   if (stats_.passes >= kInteractivePasses) sizer_.record(count, passMs);
@@ -1121,9 +1157,9 @@ Result<Frame> RenderViewImpl::readFrame(bool linear) {
   if (partial_ && stats_.passes == 0) BRDFA_TRY(passLocked(false));
   const bool host = r_->hostResolve();
   // Before the first pass of a restart the accumulators may still hold the previous scene's
-  // object pixels (a parameter change does not clear them): clear now. A preview has
-  // overwritten every object pixel.
-  if (stats_.passes == 0 && !stats_.preview) clearPending_ = true;
+  // object pixels (a parameter change does not clear them): clear now. A preview or first
+  // sample has overwritten every object pixel.
+  if (stats_.passes == 0 && !stats_.preview && !stats_.provisional) clearPending_ = true;
   if (!host || (slicesReady_ & 1u) == 0 || clearPending_) {
     auto begun = cmd_.begin();
     if (!begun) return begun.takeError();

@@ -154,6 +154,7 @@ class RenderViewImpl final : public RenderView {
     bool refreshError = false;
   };
   bool previewPending_ = false;  // the next pass is a preview (RenderSettings::previewPass)
+  bool firstSamplePending_ = false;  // the next pass is a first sample (RenderSettings::firstSampleKernel)
   std::optional<PartialPass> partial_;
   std::atomic<bool> interruptRequested_{false};
 };
