@@ -32,6 +32,8 @@ nlohmann::json statsToJson(const FrameStats& s, const std::optional<Error>& rend
                      {"rel_error", nullptr},
                      {"nan_samples", s.nanSamples},
                      {"passes", s.passes},
+                     // spp 1 by the preview kernel, replaced by the first pass of the scene's program.
+                     {"provisional", s.provisional},
                      // The last pass: its wall time, and the queue submissions it was split into.
                      {"last_pass_ms", s.lastPassMs},
                      {"last_pass_submissions", s.submissions},

@@ -115,20 +115,22 @@ Result<void> Session::applyScene(std::unique_lock<std::mutex>& updateLock, const
   // Called outside mutex_: setScene may compile for a while and must not stall stats or
   // streams. The view serializes it against the render thread's passes; the pass in progress
   // is asked to stop at its next submission, so the change waits for that, not the whole pass.
-  // Sessions are interactive: the first frame after a change comes from a quarter-cost preview.
+  // A session watched on a stream shows a change first by a quarter-cost preview. Nobody else
+  // sees a preview (GET /frame waits for whole samples), so without a stream client it would
+  // only delay the first full pass. A new program's first frame, streamed or read, is one
+  // sample by the preview kernel, while the program compiles (RenderSettings::firstSampleKernel).
   Scene interactive = scene;
-  interactive.render.previewPass = true;
-  Result<void> applied = withViewPriority([&] {
+  interactive.render.previewPass = streamClients() > 0;
+  interactive.render.firstSampleKernel = true;
+  // One view call from setScene to the session taking the new scene (pendingViewCalls_): the
+  // render thread starts no pass in between, else the stats read here would wait for it (a
+  // first sample's), and the pass after it (a new program's first, with the driver's compile,
+  // ~300 ms on lavapipe) could start before publishRequested_ is set or a reader of the first
+  // frame has asked.
+  Result<void> applied = withViewPriority([&]() -> Result<void> {
     view_->interruptPass();
-    return view_->setScene(interactive);
-  });
-  if (!applied) return applied;
-  initializer_ = nullptr;  // an explicit scene supersedes a pending default
-  initPending_ = false;
-  // The session takes the new scene before the render thread may go on (pendingViewCalls_):
-  // else it could start the pass after the preview before publishRequested_ is set, and a new
-  // program's first frame would wait for that pass (the program's JIT, ~300 ms on lavapipe).
-  withViewPriority([&] {
+    Result<void> set = view_->setScene(interactive);
+    if (!set) return set;
     FrameStats fresh = view_->stats();
     std::lock_guard lock(mutex_);
     hasScene_ = true;
@@ -145,7 +147,11 @@ Result<void> Session::applyScene(std::unique_lock<std::mutex>& updateLock, const
     // being read or encoded still reaches those: while a user drags the camera, every frame is
     // one change behind by the time it is encoded, and dropping them left ~2 frames/s.
     latest_.png.reset();
+    return {};
   });
+  if (!applied) return applied;
+  initializer_ = nullptr;  // an explicit scene supersedes a pending default
+  initPending_ = false;
   wake_.notify_all();
   progress_.notify_all();
   return {};
@@ -392,9 +398,9 @@ void Session::renderLoop() {
       wake_.wait(lock);
       continue;
     }
-    // A preview not yet shown is read first: the pass after it can be long (a new program's
-    // first, with the driver's compile).
-    if (wantPass && !(wantPublish && stats_.preview)) {
+    // A preview or first sample not yet shown is read first: the pass after it can be long (a
+    // new program's first, with the driver's compile).
+    if (wantPass && !(wantPublish && (stats_.preview || stats_.provisional))) {
       uint64_t versionBefore = stats_.sceneVersion;
       const uint64_t sppBefore = stats_.spp, passesBefore = stats_.passes;
       const bool previewBefore = stats_.preview;
@@ -429,7 +435,8 @@ void Session::renderLoop() {
       bool due = publishRequested_ || stats_.done() || Clock::now() - lastPublish_ >= kPublishInterval;
       // A pass interrupted for a scene change (RenderView::interruptPass) added nothing to show
       // (the change comes next). One that returned at its frame target has (passInProgress).
-      const bool progressed = pass->passes != passesBefore || pass->preview != previewBefore || pass->passInProgress;
+      const bool progressed = pass->passes != passesBefore || pass->spp != sppBefore || pass->preview != previewBefore ||
+                              pass->passInProgress;
       if (streamClients_ > 0 && hasImageLocked() && due && progressed) publishFrame(lock);
     } else {
       publishFrame(lock);
