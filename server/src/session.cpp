@@ -147,6 +147,7 @@ Result<void> Session::applyScene(std::unique_lock<std::mutex>& updateLock, const
     // being read or encoded still reaches those: while a user drags the camera, every frame is
     // one change behind by the time it is encoded, and dropping them left ~2 frames/s.
     latest_.png.reset();
+    lastRead_.reset();
     return {};
   });
   if (!applied) return applied;
@@ -238,6 +239,13 @@ Result<Session::EncodedFrame> Session::waitAndEncodeFrame(uint64_t minSpp, std::
       return makeError(ErrorCode::Internal, "session stopped");
     }
     outcome = renderError_ ? WaitOutcome::Failed : reached() ? WaitOutcome::Reached : WaitOutcome::TimedOut;
+    if (!pfm && outcome == WaitOutcome::Reached && lastRead_ && lastRead_->passesFinished == passesFinished_ &&
+        lastRead_->stats.sceneVersion == stats_.sceneVersion &&
+        (lastRead_->stats.spp >= target || lastRead_->stats.done())) {
+      const ReadBack read = *lastRead_;
+      lock.unlock();
+      return EncodedFrame{encodePng(read.rgba8->data(), read.width, read.height), read.stats};
+    }
     // Become a pending view call before releasing the lock: the render thread, which checks
     // both under this lock, never sees a moment with neither and starts no pass in between.
     ++pendingViewCalls_;
@@ -328,7 +336,9 @@ void Session::publishFrame(std::unique_lock<std::mutex>& lock) {
   // A scene applied between the pass and this read: nothing of it to show yet (its objects
   // would be black). Its preview comes next.
   if (!hasImage(f.stats)) return;
-  pendingRaw_ = RawFrame{std::move(f.rgba8), f.width, f.height, f.stats.spp, f.stats.sceneVersion, f.stats.done()};
+  auto pixels = std::make_shared<const std::vector<uint8_t>>(std::move(f.rgba8));
+  lastRead_ = ReadBack{pixels, f.width, f.height, f.stats, passesFinished_};
+  pendingRaw_ = RawFrame{std::move(pixels), f.width, f.height, f.stats.spp, f.stats.sceneVersion, f.stats.done()};
   encodeWake_.notify_one();
 }
 
@@ -340,15 +350,15 @@ std::vector<uint8_t> Session::encodeStreamPng(const RawFrame& raw) {
   // The final frame is always full size, however few samples max_samples allows.
   if (!raw.done && raw.spp < kPreviewBelowSpp && raw.width * raw.height >= kPreviewMinPixels) {
     int w = 0, h = 0;
-    std::vector<uint8_t> half = halveRgba8(raw.rgba8.data(), raw.width, raw.height, w, h);
+    std::vector<uint8_t> half = halveRgba8(raw.rgba8->data(), raw.width, raw.height, w, h);
     if (!half.empty()) return encodePng(half.data(), w, h, text);
   }
-  return encodePng(raw.rgba8.data(), raw.width, raw.height, text);
+  return encodePng(raw.rgba8->data(), raw.width, raw.height, text);
 }
 
 size_t Session::frameKey(const RawFrame& raw) {
   size_t key = std::hash<std::string_view>{}(
-      std::string_view(reinterpret_cast<const char*>(raw.rgba8.data()), raw.rgba8.size()));
+      std::string_view(reinterpret_cast<const char*>(raw.rgba8->data()), raw.rgba8->size()));
   for (uint64_t v : {uint64_t(raw.width), uint64_t(raw.height), raw.spp, raw.sceneVersion, uint64_t(raw.done)})
     key = key * 1000003u ^ std::hash<uint64_t>{}(v);
   return key;
@@ -431,6 +441,7 @@ void Session::renderLoop() {
         metrics_->samplesRendered += spp * pixels;
       }
       noteStatsLocked(pass.value(), true);
+      ++passesFinished_;
       progress_.notify_all();
       bool due = publishRequested_ || stats_.done() || Clock::now() - lastPublish_ >= kPublishInterval;
       // A pass interrupted for a scene change (RenderView::interruptPass) added nothing to show

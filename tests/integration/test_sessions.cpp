@@ -1,7 +1,12 @@
 // Interactive sessions: scenes, frames with min_spp, stats, the multipart PNG stream, isolation.
+#include <unistd.h>
+
+#include <array>
 #include <atomic>
 #include <cmath>
 #include <thread>
+
+#include <stb/stb_image.h>  // a system header: its unused static functions raise no warnings
 
 #include "brdfa/image_codec.h"
 #include "server_fixture.h"
@@ -278,6 +283,59 @@ TEST_F(Sessions, StreamSendsHalfSizePreviewsUntilFourSamplesAndTheConvergedFrame
   r = get("/api/sessions/default/frame?format=png&min_spp=1");
   ASSERT_TRUE(r && r->status == 200);
   EXPECT_EQ(pngWidth(r->body), 512u);
+}
+
+// The RGB codes of a PNG body's central 32x32 pixels, and its width (0: not a PNG).
+std::vector<std::array<int, 3>> pngCentreBlock(const std::string& body, int& width) {
+  int h = 0, n = 0;
+  width = 0;
+  stbi_uc* px = stbi_load_from_memory(reinterpret_cast<const stbi_uc*>(body.data()), int(body.size()), &width, &h, &n, 4);
+  if (!px) return {};
+  std::vector<std::array<int, 3>> block;
+  for (int y = h / 2 - 16; y < h / 2 + 16; ++y)
+    for (int x = width / 2 - 16; x < width / 2 + 16; ++x) {
+      const stbi_uc* c = px + (size_t(y) * width + x) * 4;
+      block.push_back({c[0], c[1], c[2]});
+    }
+  stbi_image_free(px);
+  return block;
+}
+
+// A new program's first frame, as the stream shows it, is also what GET /frame?min_spp=1
+// answers at once (the session's last read, while the program's first pass is still to come or
+// in flight), full size where the stream's part is a half-size preview; and it is the furnace's
+// exact 1 (clamp tone map: code 255). A display change (exposure -1 stop: 0.5, sRGB code 188)
+// is never answered from that read.
+TEST_F(Sessions, AReadAfterTheStreamsFirstFrameGetsThatImageFullSizeAndNeverAStaleOne) {
+  std::string text = kLambertWhite;
+  text += "\n// first frame " + std::to_string(::getpid()) + "\n";  // a program new to every cache
+  auto r = put("/api/brdfs/itest_first_frame", text, "text/plain");
+  ASSERT_TRUE(r && (r->status == 200 || r->status == 201)) << (r ? r->body : "");
+  json scene = furnaceScene("itest_first_frame", json::object(), 512, 64, 4);
+  r = put("/api/sessions/default/scene", scene.dump());
+  ASSERT_TRUE(r && r->status == 200) << (r ? r->body : "");
+  const uint64_t version = bodyJson(get("/api/sessions/default/stats"))["scene_version"].get<uint64_t>();
+  PartReader reader = streamUntil(*server_, 1);
+  ASSERT_FALSE(reader.pngs.empty()) << reader.error;
+
+  r = get("/api/sessions/default/frame?format=png&min_spp=1");
+  ASSERT_TRUE(r && r->status == 200) << (r ? r->body : "");
+  EXPECT_EQ(std::stoull(r->get_header_value("X-Scene-Version")), version);
+  EXPECT_GE(std::stoull(r->get_header_value("X-Samples")), 1u);
+  int width = 0;
+  for (const auto& rgb : pngCentreBlock(r->body, width)) ASSERT_EQ(rgb, (std::array<int, 3>{255, 255, 255}));
+  EXPECT_EQ(width, 512);
+
+  scene["render"]["exposure"] = -1;
+  r = put("/api/sessions/default/scene", scene.dump());
+  ASSERT_TRUE(r && r->status == 200) << (r ? r->body : "");
+  r = get("/api/sessions/default/frame?format=png&min_spp=1");
+  ASSERT_TRUE(r && r->status == 200) << (r ? r->body : "");
+  EXPECT_GT(std::stoull(r->get_header_value("X-Scene-Version")), version);
+  const auto block = pngCentreBlock(r->body, width);
+  ASSERT_FALSE(block.empty());
+  for (const auto& rgb : block)
+    for (int c : rgb) ASSERT_NEAR(c, 188, 1) << "0.5 in sRGB: 187.5";
 }
 
 // While a stream client watches, each pass is sized to a 42 ms frame (Session::kStreamFrameMs);

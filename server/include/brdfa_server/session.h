@@ -210,7 +210,7 @@ class Session {
   // A frame read back for the stream, waiting for the encoder thread. Only the newest is kept:
   // when encoding falls behind, older frames are dropped rather than queued.
   struct RawFrame {
-    std::vector<uint8_t> rgba8;
+    std::shared_ptr<const std::vector<uint8_t>> rgba8;  // shared with lastRead_
     int width = 0, height = 0;
     uint64_t spp = 0, sceneVersion = 0;
     bool done = false;  // the final frame (FrameStats::done())
@@ -221,6 +221,18 @@ class Session {
   static size_t frameKey(const RawFrame& raw);
   std::optional<RawFrame> pendingRaw_;
   std::condition_variable encodeWake_;
+  // The last frame read for the stream, and passesFinished_ when it was read. Until another pass
+  // finishes it is what a read of the view would return, so a reader whose target it meets
+  // gets it without a view call, which would wait for the pass in flight (after a first
+  // sample: a new program's first, with the driver's JIT).
+  struct ReadBack {
+    std::shared_ptr<const std::vector<uint8_t>> rgba8;
+    int width = 0, height = 0;
+    FrameStats stats;
+    uint64_t passesFinished = 0;
+  };
+  std::optional<ReadBack> lastRead_;
+  uint64_t passesFinished_ = 0;  // render passes returned, of any scene
   // frameKey of what the encoder last published (encodeLoop only; 0: nothing yet): a frame
   // equal to it is not sent again. A pass shown partway before any of its tiles finished reads
   // back the same image.
