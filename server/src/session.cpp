@@ -397,15 +397,23 @@ void Session::renderLoop() {
   std::unique_lock lock(mutex_);
   while (!stopping_) {
     bool canRender = hasScene_ && !renderError_;
+    const Clock::time_point now = Clock::now();
     // A waiter whose samples are there reads next: no new pass may slip in before its read.
     bool waiterSatisfied = !waitTargets_.empty() && stats_.spp >= *waitTargets_.begin();
-    bool wantPass = canRender && !stats_.done() && watchedLocked(Clock::now()) && pendingViewCalls_ == 0 &&
-                    !waiterSatisfied;
+    // A first sample stands for kFirstPassGrace unless a reader waits for more samples.
+    const Clock::time_point graceEnd = provisionalSince_ + kFirstPassGrace;
+    const bool inGrace = stats_.provisional && waitTargets_.empty() && now < graceEnd;
+    bool wantPass = canRender && !stats_.done() && watchedLocked(now) && pendingViewCalls_ == 0 && !waiterSatisfied &&
+                    !inGrace;
     bool wantPublish = canRender && streamClients_ > 0 && publishRequested_ && hasImageLocked() && pendingViewCalls_ == 0;
     if (!wantPass && !wantPublish) {
-      // Nothing to do until a scene change, a watcher, a stream client or stop. A watched-until
-      // deadline needs no timed wake: it only ever turns rendering off, checked after each pass.
-      wake_.wait(lock);
+      // Nothing to do until a scene change, a watcher, a stream client or stop (or the grace's
+      // end). A watched-until deadline needs no timed wake: it only ever turns rendering off,
+      // checked after each pass.
+      if (inGrace)
+        wake_.wait_until(lock, graceEnd);
+      else
+        wake_.wait(lock);
       continue;
     }
     // A preview or first sample not yet shown is read first: the pass after it can be long (a
@@ -442,6 +450,7 @@ void Session::renderLoop() {
       }
       noteStatsLocked(pass.value(), true);
       ++passesFinished_;
+      if (pass->provisional) provisionalSince_ = Clock::now();
       progress_.notify_all();
       bool due = publishRequested_ || stats_.done() || Clock::now() - lastPublish_ >= kPublishInterval;
       // A pass interrupted for a scene change (RenderView::interruptPass) added nothing to show

@@ -308,7 +308,7 @@ std::vector<std::array<int, 3>> pngCentreBlock(const std::string& body, int& wid
 // is never answered from that read.
 TEST_F(Sessions, AReadAfterTheStreamsFirstFrameGetsThatImageFullSizeAndNeverAStaleOne) {
   std::string text = kLambertWhite;
-  text += "\n// first frame " + std::to_string(::getpid()) + "\n";  // a program new to every cache
+  text.insert(text.find("::end shader"), "// first frame " + std::to_string(::getpid()) + "\n");  // a new program
   auto r = put("/api/brdfs/itest_first_frame", text, "text/plain");
   ASSERT_TRUE(r && (r->status == 200 || r->status == 201)) << (r ? r->body : "");
   json scene = furnaceScene("itest_first_frame", json::object(), 512, 64, 4);
@@ -336,6 +336,52 @@ TEST_F(Sessions, AReadAfterTheStreamsFirstFrameGetsThatImageFullSizeAndNeverASta
   ASSERT_FALSE(block.empty());
   for (const auto& rgb : block)
     for (int c : rgb) ASSERT_NEAR(c, 188, 1) << "0.5 in sRGB: 187.5";
+}
+
+// A script that reads a new program's first frame and moves on: the first sample stands for
+// Session::kFirstPassGrace (80 ms) unless a reader asks for more, so the next change does not
+// wait for the driver's compile of a program it has left, and that program never runs. On a
+// CPU device (the only kind with first samples), when the change came within the grace, going
+// back to the program starts with a first sample again: its own kernel has not run. A read
+// of 8 samples then ends the wait, and the program's passes replace the first sample (spp
+// counts from them: 8 exactly, max_samples 8), exactly 1 in the furnace.
+TEST_F(Sessions, AFirstSampleStandsBrieflyUnlessAReaderWantsMore) {
+  const bool cpu = bodyJson(get("/api/health"))["device"]["type"] == "cpu";
+  std::string text = kLambertWhite;
+  text.insert(text.find("::end shader"), "// grace " + std::to_string(::getpid()) + "\n");  // a new program
+  auto r = put("/api/brdfs/itest_grace", text, "text/plain");
+  ASSERT_TRUE(r && (r->status == 200 || r->status == 201)) << (r ? r->body : "");
+  const std::string fresh = furnaceScene("itest_grace", json::object(), 256, 8, 4).dump();
+  const std::string known = furnaceScene("itest_lambert", json::object(), 256, 8, 4).dump();
+  Image img;
+  uint64_t samples = 0;
+  r = put("/api/sessions/default/scene", known);  // its program built and run
+  ASSERT_TRUE(r && r->status == 200) << (r ? r->body : "");
+  ASSERT_NO_FATAL_FAILURE(frame("default", 8, img));
+
+  r = put("/api/sessions/default/scene", fresh);
+  ASSERT_TRUE(r && r->status == 200) << (r ? r->body : "");
+  ASSERT_NO_FATAL_FAILURE(frame("default", 1, img, &samples));
+  const auto read = Clock::now();
+  r = put("/api/sessions/default/scene", known);
+  ASSERT_TRUE(r && r->status == 200) << (r ? r->body : "");
+  const bool inGrace = Clock::now() - read < std::chrono::milliseconds(60);
+  EXPECT_NEAR(interiorMean(img, 1.0, 1e-4), 1.0, 1e-4);
+
+  r = put("/api/sessions/default/scene", fresh);
+  ASSERT_TRUE(r && r->status == 200) << (r ? r->body : "");
+  ASSERT_NO_FATAL_FAILURE(frame("default", 1, img, &samples));
+  json stats = bodyJson(get("/api/sessions/default/stats"));
+  if (cpu && inGrace) {
+    EXPECT_EQ(samples, 1u);
+    EXPECT_TRUE(stats["provisional"].get<bool>()) << "the program ran while its first sample stood: " << stats.dump();
+  }
+  ASSERT_NO_FATAL_FAILURE(frame("default", 8, img, &samples));
+  EXPECT_EQ(samples, 8u);
+  EXPECT_NEAR(interiorMean(img, 1.0, 1e-4), 1.0, 1e-4);
+  stats = bodyJson(get("/api/sessions/default/stats"));
+  EXPECT_FALSE(stats["provisional"].get<bool>()) << stats.dump();
+  EXPECT_TRUE(stats["done"].get<bool>()) << stats.dump();
 }
 
 // While a stream client watches, each pass is sized to a 42 ms frame (Session::kStreamFrameMs);

@@ -132,6 +132,12 @@ class Session {
 
   // Minimum interval between published stream frames (about 30 per second).
   static constexpr std::chrono::milliseconds kPublishInterval{33};
+  // After a new program's first sample, how long its first pass waits for a further scene
+  // change unless a reader asks for more samples. That pass carries the driver's JIT of the
+  // whole program, which nothing interrupts (~100-200 ms on lavapipe); a script that posts
+  // BRDFs in a loop makes its next change within ~50 ms of reading the first sample, and would
+  // otherwise wait for that JIT of a program it no longer uses.
+  static constexpr std::chrono::milliseconds kFirstPassGrace{80};
   // The frame interval a streamed session aims at: while a stream client watches, each pass is
   // sized to it less the time a frame's read takes (RenderView::renderPass's frame target).
   // Unwatched, passes keep samples_per_frame. docs/design.md section 5 asks for at least 20 frames/s;
@@ -233,6 +239,9 @@ class Session {
   };
   std::optional<ReadBack> lastRead_;
   uint64_t passesFinished_ = 0;  // render passes returned, of any scene
+  // When the current first sample (FrameStats::provisional) finished: the program's first pass
+  // waits until kFirstPassGrace after it (Session::renderLoop).
+  Clock::time_point provisionalSince_{};
   // frameKey of what the encoder last published (encodeLoop only; 0: nothing yet): a frame
   // equal to it is not sent again. A pass shown partway before any of its tiles finished reads
   // back the same image.
