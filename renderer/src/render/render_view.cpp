@@ -889,6 +889,7 @@ Result<FrameStats> RenderViewImpl::passLocked(bool interruptible, double frameTa
   uint64_t submissions = 0;
   double maxSubmissionMs = 0;
   std::vector<const ShadeKernel*> bound;  // kernels the submission being recorded dispatches
+  bool previewStagesCompiled = false;     // the preview kernel's stages have run in this pass
   do {
     // Slice 0 recorded by an earlier submission (all waited for) is on the host's side now.
     if (targetMs > 0 && !coverageKnown_ && (slicesReady_ & 1u)) measureCoverage();
@@ -983,12 +984,27 @@ Result<FrameStats> RenderViewImpl::passLocked(bool interruptible, double frameTa
         // reading what the one before wrote to the scratch; the next dispatch writes it again.
         const VkPipeline stages[3] = {r_->previewSetupPipeline(env_->constant), kernel.kernel->pipeline(),
                                       r_->previewScatterPipeline()};
-        for (VkPipeline stage : stages) {
-          vkCmdBindPipeline(cb, VK_PIPELINE_BIND_POINT_COMPUTE, stage);
+        for (int k = 0; k < 3; ++k) {
+          vkCmdBindPipeline(cb, VK_PIPELINE_BIND_POINT_COMPUTE, stages[k]);
           vkCmdDispatch(cb, cols, rows, 1);
           memoryBarrier(cb, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_ACCESS_SHADER_WRITE_BIT,
                         VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_ACCESS_SHADER_READ_BIT | VK_ACCESS_SHADER_WRITE_BIT);
+          // The pass's first dispatch of each stage may carry its driver compile (the JIT, at
+          // the first dispatch on lavapipe): each in a submission of its own, so the budget of
+          // a submission meets one compile at a time, as in a program's first pass.
+          if (previewStagesCompiled || k == 2) continue;
+          double stageMs = 0;
+          BRDFA_TRY(cmd_.submitAndWait(&stageMs, /*viewPass=*/true));
+          ++submissions;
+          maxSubmissionMs = std::max(maxSubmissionMs, stageMs);
+          auto again = cmd_.begin();
+          if (!again) return again.takeError();
+          cb = *again;
+          vkCmdBindDescriptorSets(cb, VK_PIPELINE_BIND_POINT_COMPUTE, layout, 0, 1, &viewSets_[slice], 0, nullptr);
+          vkCmdBindDescriptorSets(cb, VK_PIPELINE_BIND_POINT_COMPUTE, layout, 1, 1, &o.set, 0, nullptr);
+          vkCmdPushConstants(cb, layout, VK_SHADER_STAGE_COMPUTE_BIT, 0, sizeof(push), &push);
         }
+        previewStagesCompiled = true;
       } else {
         vkCmdBindPipeline(cb, VK_PIPELINE_BIND_POINT_COMPUTE, kernel.kernel->pipeline());
         vkCmdDispatch(cb, cols, rows, 1);
