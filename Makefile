@@ -12,7 +12,7 @@ DEPS_MODE ?=
 # Extra arguments to the first cmake configure of $(BUILD), e.g. CMAKE_ARGS="-DBRDFA_BUILD_TESTS=OFF".
 CMAKE_ARGS ?=
 
-.PHONY: all deps web build run test bench soak sanitize clean
+.PHONY: all deps web build run test bench soak sanitize format clean
 
 all: build
 
@@ -64,6 +64,10 @@ sanitize: deps web
 	cd build-asan && LD_PRELOAD=$(LVP_LIB) ASAN_OPTIONS=verify_asan_link_order=0:detect_leaks=1 \
 		LSAN_OPTIONS=suppressions=$(CURDIR)/tests/lsan.supp \
 		UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 ctest --output-on-failure -j 1
+
+# Lays out every C++ file as .clang-format says (tests/style/check_format.mjs checks it).
+format:
+	find renderer server tests bench -name '*.cpp' -o -name '*.h' | xargs clang-format -i --style=file
 
 clean:
 	rm -rf $(BUILD) build-asan

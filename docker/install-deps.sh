@@ -16,8 +16,9 @@ libvulkan-dev glslang-dev glslang-tools \
 libglm-dev libtinyobjloader-dev libcpp-httplib-dev libssl-dev libbrotli-dev zlib1g-dev \
 nlohmann-json3-dev libstb-dev libtinyexr-dev libopenexr-dev libdeflate-dev \
 nodejs npm"
-# Running on this machine (lavapipe) and testing (GoogleTest, the browser tests' Chromium).
-RUN_TEST_PACKAGES="mesa-vulkan-drivers libgtest-dev chromium haproxy"
+# Running on this machine (lavapipe) and testing (GoogleTest, the browser tests' Chromium,
+# clang-format for the layout check).
+RUN_TEST_PACKAGES="mesa-vulkan-drivers libgtest-dev chromium haproxy clang-format"
 
 # Wanted but not required: blender-data ships eight CC0 equirectangular EXR worlds that the
 # server offers as environments blender_<name> when present. Tried once per machine.
