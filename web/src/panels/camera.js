@@ -4,11 +4,11 @@
 // view. In both, W/A/S/D/Q/E move (forward, left, back, right, up, down) while the view has
 // focus or nothing editable does. "Frame object" aims at the selected object from a distance at
 // which it fills the view; "Reset view" asks the server for its default camera. A small form
-// edits position, yaw, pitch, fov and both speeds. Changes PATCH the scene's `camera` (one
-// request in flight, latest value wins: coalesce.js); the maths is camera-math.js.
-import * as api from '../api.js';
+// edits position, yaw, pitch, fov and both speeds. Changes edit the scene's `camera`
+// (scene-commands.js: one request in flight, the latest value winning); the maths is
+// camera-math.js.
 import { state, set, on } from '../state.js';
-import { coalesce } from '../coalesce.js';
+import { editScene, editsPending } from '../scene-commands.js';
 import { move, clamp, MAX_PITCH, orbit, dolly, orbitLimits, frameSphere } from '../camera-math.js';
 import { boundingSphere } from '../mesh-bounds.js';
 
@@ -26,26 +26,21 @@ export function mountCamera(viewEl, formEl, barEl) {
   let lastTick = 0;
   let dragging = false;
 
-  // `null` resets: a merge patch that removes `camera` gives the scene its default camera.
-  const send = coalesce(async (camera) => {
-    try {
-      const scene = await api.patchScene(state.session, { camera });
-      set({ scene });
-      if (camera === null) { cam = structuredClone(scene.camera); showForm(); }
-    } catch (e) {
-      set({ status: `camera: ${e.message}` });
-    }
-  });
+  const failed = (e) => set({ status: `camera: ${e.message}` });
   const changed = () => {
-    send({ ...cam, position: cam.position.slice() });
+    editScene({ camera: { ...cam, position: cam.position.slice() } }).catch(failed);
     showForm();
   };
+  // `null` resets: a merge patch that removes `camera` gives the scene its default camera,
+  // which only the server knows: not shown before its answer.
+  const reset = () => editScene({ camera: null }, { optimistic: false })
+    .then((scene) => { cam = structuredClone(scene.camera); showForm(); }, failed);
 
   // Adopt the server's camera only when we are not driving it: a reply to an older PATCH
   // must not pull the camera back while keys are held or a drag is on.
   on('scene', ({ scene }) => {
     if (!scene?.camera) return;
-    if (cam && (held.size || dragging || !send.idle())) return;
+    if (cam && (held.size || dragging || editsPending())) return;
     cam = structuredClone(scene.camera);
     showForm();
   });
@@ -122,7 +117,7 @@ export function mountCamera(viewEl, formEl, barEl) {
     cam = frameSphere(cam, target(), aspect());
     changed();
   });
-  barEl.querySelector('.view-reset').addEventListener('click', () => send(null));
+  barEl.querySelector('.view-reset').addEventListener('click', reset);
 
   // ---- form ----
   const input = (name) => formEl.querySelector(`[name="${name}"]`);

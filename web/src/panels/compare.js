@@ -6,8 +6,9 @@
 // colour bar and the relative RMS difference with its standard error, refreshed every 500 ms
 // while either view gains samples. Closing deletes B; so does leaving the page.
 import * as api from '../api.js';
-import { state, set, on } from '../state.js';
+import { state, on } from '../state.js';
 import { coalesce } from '../coalesce.js';
+import { reloadScene } from '../scene-commands.js';
 import { paramControls, defaults } from '../param-controls.js';
 import { prepare, widthOf } from '../analysis-plots/canvas.js';
 import { drawColourBar } from '../analysis-plots/heatmap.js';
@@ -156,7 +157,7 @@ export function mountCompare(el) {
     $('.sbs-open').disabled = true;
     try {
       // The server's scene, not only what this page last heard: a script may have changed it.
-      set({ scene: await api.getScene(state.session) });
+      await reloadScene();
       const index = state.selected;
       b = { id: null, index };
       const scene = mirror();

@@ -12,6 +12,7 @@ import { shader } from '@codemirror/legacy-modes/mode/clike';
 import { setDiagnostics, lintGutter } from '@codemirror/lint';
 import * as api from '../api.js';
 import { state, set, on } from '../state.js';
+import { editScene, reloadScene } from '../scene-commands.js';
 import { refreshLibrary, NAME_RE, bareName, namespace, ownName, canWrite, canDelete } from '../library.js';
 
 const IDLE_MS = 800;   // a pause in typing this long compiles
@@ -40,6 +41,14 @@ function keptParams(old, decls) {
   const out = {};
   for (const d of decls) if (old && old[d.name] !== undefined && fits[d.type]?.(old[d.name])) out[d.name] = old[d.name];
   return out;
+}
+
+/** The selected object renders `name`, keeping the values that still fit; resolves once the server answered. */
+function switchObject(name, decls) {
+  const sel = state.selected;
+  return editScene((scene) => ({
+    objects: scene.objects.map((o, i) => (i === sel ? { ...o, brdf: name, params: keptParams(o.params, decls) } : o)),
+  }));
 }
 
 // What New starts from: one parameter of each kind and a Lambert + Blinn-Phong lobe.
@@ -104,12 +113,9 @@ export function mountEditor(el, libEl) {
     set({ status: 'compiling…' });
     try {
       const brdf = await api.putBrdf(name, source);
-      const sel = state.selected;
-      const params = keptParams(state.scene.objects[sel]?.params, brdf.params);
-      const objects = state.scene.objects.map((o, i) => (i === sel ? { ...o, brdf: name, params } : o));
-      const scene = await api.patchScene(state.session, { objects });
+      await switchObject(name, brdf.params);
       stored = source;
-      set({ scene, brdf: { name, params: brdf.params }, diagnostics: brdf.warnings || [],
+      set({ brdf: { name, params: brdf.params }, diagnostics: brdf.warnings || [],
             status: brdf.cached ? 'compiled (cached)' : `compiled in ${brdf.compile_ms.toFixed(0)} ms` });
     } catch (e) {
       const diagnostics = e.body?.diagnostics || [];
@@ -174,10 +180,8 @@ export function mountEditor(el, libEl) {
 
   /** The selected object switches to `name` (kept parameter values that still fit). */
   async function useForObject(name, params) {
-    const sel = state.selected;
-    const kept = keptParams(state.scene.objects[sel]?.params, params);
-    const objects = state.scene.objects.map((o, i) => (i === sel ? { ...o, brdf: name, params: kept } : o));
-    set({ scene: await api.patchScene(state.session, { objects }), brdf: { name, params } });
+    await switchObject(name, params);
+    set({ brdf: { name, params } });
   }
 
   /** Opens a library BRDF: its text in the editor, and the selected object renders it. */
@@ -251,15 +255,14 @@ export function mountEditor(el, libEl) {
     const e = state.editing;
     if (!e?.name || e.builtin || !canDelete(e.name) || !confirm(`Delete "${e.name}" and its presets? Objects using it keep rendering a scratch copy.`)) return;
     try {
-      // The server's scene, not only this page's copy: the reply to a switch to this BRDF made
-      // just before may not have arrived yet, while the server already renders it.
-      const scene = (await api.getScene(state.session).catch(() => null)) || state.scene;
-      const users = [scene, state.scene].some((sc) => sc.objects.some((o) => o.brdf === e.name));
-      if (users) {   // a scene cannot name a deleted BRDF: move its objects to this tab's scratch copy
+      // The server's scene, not only this page's copy: a script may have changed it. The
+      // local scene holds every edit of this page too (one not answered yet included).
+      await reloadScene().catch(() => null);
+      if (state.scene.objects.some((o) => o.brdf === e.name)) {
+        // A scene cannot name a deleted BRDF: move its objects to this tab's scratch copy.
         const scratch = scratchName(state.session);
         await api.putBrdf(scratch, e.source);
-        const objects = scene.objects.map((o) => (o.brdf === e.name ? { ...o, brdf: scratch } : o));
-        set({ scene: await api.patchScene(state.session, { objects }) });
+        await editScene((scene) => ({ objects: scene.objects.map((o) => (o.brdf === e.name ? { ...o, brdf: scratch } : o)) }));
         if (state.brdf?.name === e.name) set({ brdf: { ...state.brdf, name: scratch } });
       }
       await api.deleteBrdf(e.name);

@@ -1,11 +1,11 @@
 // Objects (the object editor): add and remove objects (at least one stays), choose or upload a
 // mesh and up to four textures, choose the BRDF, translate/rotate/scale; and the scene-wide
-// samples per frame, maximum samples, sampling mode and target error. Every change PATCHes the whole `objects` array (a
-// merge patch replaces arrays) or `render`; the server answers the full scene.
+// samples per frame, maximum samples, sampling mode and target error. Every change edits the
+// whole `objects` array (a merge patch replaces arrays) or `render` (scene-commands.js).
 // The object chosen here (state.selected) is the one the editor and the Parameters panel edit.
 import * as api from '../api.js';
 import { state, set, on } from '../state.js';
-import { coalesce } from '../coalesce.js';
+import { editScene } from '../scene-commands.js';
 import { refreshAssets, isScratch } from '../library.js';
 import { backOff, backOffToFit, centreOn } from '../camera-math.js';
 import { boundingSphere } from '../mesh-bounds.js';
@@ -33,30 +33,19 @@ export function mountObjects(el) {
     }
   }
 
-  const send = coalesce(async (patch) => {
-    try {
-      const scene = await api.patchScene(state.session, patch);
-      // With a newer edit waiting, this answer lacks it: keep the local scene that has it (the
-      // next edit builds on it), and take the answer to the newer one instead.
-      if (!send.waiting()) set({ scene });
-      if (status.classList.contains('error')) { status.textContent = ''; status.classList.remove('error'); }
-    } catch (e) {
-      status.textContent = e.message;
-      status.classList.add('error');
-      set({ status: `objects: ${e.message}` });
-      try { set({ scene: await api.getScene(state.session) }); } catch { /* keep what we have */ }
-    }
-  }, // Waiting merge patches combine: a newer `objects` array wins, `render` fields add up.
-  (older, newer) => ({ ...older, ...newer,
-    ...(older.render && newer.render ? { render: { ...older.render, ...newer.render } } : {}) }));
-  const objects = () => state.scene.objects.map((o) => structuredClone(o));
-  const patchObject = (changes) => {
-    const all = objects();
-    Object.assign(all[sel], changes);
-    state.scene.objects = all;    // later edits build on this one before the answer comes
-    send({ objects: all });
+  const ok = () => { if (status.classList.contains('error')) { status.textContent = ''; status.classList.remove('error'); } };
+  const failed = (e) => {
+    status.textContent = e.message;
+    status.classList.add('error');
+    set({ status: `objects: ${e.message}` });
   };
-
+  /** Edits the scene (a merge patch, or a function of a copy of the scene returning one). */
+  const send = (change) => editScene(change).then(ok, failed);
+  const patchObject = (changes) => send((scene) => {
+    Object.assign(scene.objects[sel], changes);
+    return { objects: scene.objects };
+  });
+  const objects = () => state.scene.objects;   // read only: edits go through send()
   const option = (value, text) => { const o = document.createElement('option'); o.value = value; o.textContent = text; return o; };
   const fillSelect = (select, entries, value) => {
     const have = entries.some(([v]) => v === value);
@@ -101,30 +90,28 @@ export function mountObjects(el) {
 
   list.addEventListener('change', () => { select(Number(list.value)); show(); });
   $('.obj-add').addEventListener('click', () => {
-    const all = objects();
-    const base = all[sel] || { translate: [0, 0, 0] };
-    all.push({ mesh: 'sphere', brdf: base.brdf || 'lambert', translate: [base.translate[0] + 2.2, base.translate[1], base.translate[2]] });
-    state.scene.objects = all;
-    // Beside the selected object, which may put it outside the view: if so, the camera (same
-    // direction) centres the objects and backs off until every one is in the frame.
-    const cam = state.scene.camera;
-    const spheres = all.map(boundingSphere);
-    const aspect = state.scene.render.width / state.scene.render.height;
-    const patch = { objects: all };
-    if (backOffToFit(cam, spheres, aspect) > 0) {
-      const centred = { ...cam, position: centreOn(cam, spheres.map((b) => b.center)) };
-      patch.camera = { position: backOff(centred.position, cam.yaw, cam.pitch, backOffToFit(centred, spheres, aspect)) };
-    }
-    send(patch);
-    select(all.length - 1);
+    send((scene) => {
+      const all = scene.objects;
+      const base = all[sel] || { translate: [0, 0, 0] };
+      all.push({ mesh: 'sphere', brdf: base.brdf || 'lambert', translate: [base.translate[0] + 2.2, base.translate[1], base.translate[2]] });
+      // Beside the selected object, which may put it outside the view: if so, the camera (same
+      // direction) centres the objects and backs off until every one is in the frame.
+      const cam = scene.camera;
+      const spheres = all.map(boundingSphere);
+      const aspect = scene.render.width / scene.render.height;
+      const patch = { objects: all };
+      if (backOffToFit(cam, spheres, aspect) > 0) {
+        const centred = { ...cam, position: centreOn(cam, spheres.map((b) => b.center)) };
+        patch.camera = { position: backOff(centred.position, cam.yaw, cam.pitch, backOffToFit(centred, spheres, aspect)) };
+      }
+      return patch;
+    });
+    select(objects().length - 1);
   });
   $('.obj-remove').addEventListener('click', () => {
-    const all = objects();
-    if (all.length <= 1) return;   // at least one object stays
-    all.splice(sel, 1);
-    state.scene.objects = all;
-    send({ objects: all });
-    select(Math.min(sel, all.length - 1));
+    if (objects().length <= 1) return;   // at least one object stays
+    send((scene) => { scene.objects.splice(sel, 1); return { objects: scene.objects }; });
+    select(Math.min(sel, objects().length - 1));
     show();
   });
   $('.obj-mesh').addEventListener('change', (ev) => patchObject({ mesh: ev.target.value }));
@@ -150,8 +137,7 @@ export function mountObjects(el) {
     input.addEventListener('change', () => {
       const v = Number(input.value);
       if (input.value === '' || !Number.isFinite(v)) return;
-      const o = objects()[sel];
-      const vec = o[input.dataset.k].slice();
+      const vec = objects()[sel][input.dataset.k].slice();
       vec[Number(input.dataset.i)] = v;
       patchObject({ [input.dataset.k]: vec });
     });

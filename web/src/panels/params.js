@@ -1,10 +1,10 @@
 // Parameters: sliders, colour pickers and check boxes built from the declarations of the BRDF
 // that the selected object uses (state.brdf.params; state.selected, chosen in the Objects tab).
-// Moving one PATCHes objects[selected].params: the server
-// applies value-only changes without recompiling, so the frame updates within a pass.
+// Moving one edits objects[selected].params (scene-commands.js): the server applies
+// value-only changes without recompiling, so the frame updates within a pass.
 import * as api from '../api.js';
 import { state, set, on } from '../state.js';
-import { coalesce } from '../coalesce.js';
+import { editScene } from '../scene-commands.js';
 import { toHex, fromHex } from '../color.js';
 import { NAME_RE, isScratch } from '../library.js';
 
@@ -13,15 +13,6 @@ export function mountParams(el) {
   const list = el.querySelector('.params-list');
   const controls = new Map();   // param name -> {decl, input, readout}
 
-  // `objects` is an array: a merge patch replaces it whole, so send every object.
-  const send = coalesce(async ({ index, params }) => {
-    const objects = state.scene.objects.map((o, i) => (i === index ? { ...o, params } : o));
-    try {
-      set({ scene: await api.patchScene(state.session, { objects }) });
-    } catch (e) {
-      set({ status: `parameters: ${e.message}` });
-    }
-  });
   const current = () => ({ ...(state.scene?.objects?.[state.selected]?.params || {}) });
 
   const readValue = (decl, input) => {
@@ -84,12 +75,12 @@ export function mountParams(el) {
     list.hidden = !controls.size;
   }
 
-  // Keep the local scene in step so a second control's patch carries this value too.
+  // `objects` is an array: a merge patch replaces it whole, so the edit holds every object.
+  // The local scene takes it at once, so a second control's edit carries this value too.
   function apply(params) {
     const index = state.selected;
-    if (!state.scene.objects[index]) return;
-    state.scene.objects[index].params = params;
-    send({ index, params });
+    editScene((scene) => (scene.objects[index] ? { objects: scene.objects.map((o, i) => (i === index ? { ...o, params } : o)) } : null))
+      .catch((e) => set({ status: `parameters: ${e.message}` }));
   }
 
   // ---- presets: named value sets of this BRDF (stored on the server) ----
