@@ -13,6 +13,7 @@
 // Exit 0 pass, 1 fail.
 import { readFileSync, readdirSync, statSync } from 'node:fs';
 import { join, relative, resolve } from 'node:path';
+import { pathToFileURL } from 'node:url';
 
 export const MAX_LINES = 120;
 const COMMANDS = 'scene-commands.js';
@@ -310,4 +311,4 @@ function main() {
   process.exit(failed ? 1 : 0);
 }
 
-if (import.meta.url === `file://${process.argv[1]}`) main();
+if (import.meta.url === pathToFileURL(process.argv[1]).href) main();
