@@ -192,11 +192,13 @@ export function functions(src) {
 // ---- the rules ----
 const NETWORK = /\b(fetch\s*\(|XMLHttpRequest\b|EventSource\b|WebSocket\b|sendBeacon\b)/;
 // state.scene, then members (.name, [expr]), then an assignment (not == or ===, not =>), or
-// ++/--, or delete; Object.assign into it.
+// ++/--, or delete; Object.assign into it; an array method that changes it in place.
 const SCENE_WRITE = new RegExp([
   String.raw`\bstate\s*\.\s*scene(\s*(\.\s*[\w$]+|\[[^\]]*\]))*\s*(=(?![=>])|[-+*/%&|^]=|\*\*=|<<=|>>>?=|&&=|\|\|=|\?\?=|\+\+|--)`,
   String.raw`(\+\+|--|\bdelete)\s*state\s*\.\s*scene\b`,
   String.raw`\bObject\s*\.\s*(assign|defineProperty|defineProperties)\s*\(\s*state\s*\.\s*scene\b`,
+  // An array of it changed in place.
+  String.raw`\bstate\s*\.\s*scene(\s*(\.\s*[\w$]+|\[[^\]]*\]))*\s*\.\s*(push|pop|shift|unshift|splice|sort|reverse|fill|copyWithin)\s*\(`,
 ].join('|'));
 
 const lineAt = (text, index) => text.slice(0, index).split('\n').length;
@@ -265,6 +267,9 @@ function selftest() {
     ['panels/a.js', `state.scene.render['width'] += 2;\n`, 'assigns into state.scene'],
     ['panels/a.js', `delete state.scene.notes;\n`, 'assigns into state.scene'],
     ['panels/a.js', `Object.assign(state.scene, x);\n`, 'assigns into state.scene'],
+    ['panels/a.js', `state.scene.objects.push(o);\n`, 'assigns into state.scene'],
+    ['panels/a.js', `state.scene.objects[i].textures.splice(0, 1);\n`, 'assigns into state.scene'],
+    ['panels/a.js', `const all = state.scene.objects.map((o) => o);\nall.push(1);\n`, null],
     ['panels/a.js', `if (state.scene.objects === x || state.scene == y) f(state.scene);\nconst g = (state) => state.scene;\n`, null],
     ['state.js', `export function set(c) { Object.assign(state, c); state.scene = c.scene; }\n`, null],
     ['panels/a.js', `fetch('/api/health');\n`, 'network access'],
