@@ -1,6 +1,6 @@
 // Bundles the UI (src/main.js and the npm packages it imports: CodeMirror 6) into dist/, which
 // is ignored by git: dependencies come from npm at build time, never from committed bundles
-// (docs/design.md section 2). esbuild takes ~100 ms, so `make` and the browser test may run it freely.
+// (docs/design.md section 2). esbuild is quick, so `make` and the browser test may run it freely.
 // Code splitting: main.js stays small and starts the session and stream at once; the editor
 // (CodeMirror, most of the bytes) arrives as a chunk through a dynamic import meanwhile, and
 // uPlot (the convergence plot) when its tab is first shown, with its stylesheet as dist/uplot.css.

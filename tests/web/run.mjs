@@ -1,8 +1,8 @@
 // Browser tests of the UI in Debian's Chromium, driven by playwright-core, against
 // the real server binary. Registered in CTest as `web_ui` (tests/CMakeLists.txt):
 //   node tests/web/run.mjs --server build/server/brdfa-server --root . --artifacts build/web-artifacts
-// Rebuilds web/dist first (esbuild, ~0.1 s) so it always tests the current sources. Prints the
-// timings the issue asks for (page load -> first frame, slider -> updated frame) and saves
+// Rebuilds web/dist first (esbuild is quick) so it always tests the current sources. Prints the
+// UI's timings (page load -> first frame, slider -> updated frame) and saves
 // screenshots of the main states into --artifacts. Exit 0 pass, 1 fail, 77 skipped (no browser).
 import { existsSync, mkdirSync } from 'node:fs';
 import { createRequire } from 'node:module';
@@ -13,6 +13,7 @@ import { grab, variance, meanDiff, waitForFrame } from './frames.mjs';
 import { checks } from './checks.mjs';
 import { layoutChecks } from './layout.mjs';
 import { analysisChecks } from './analysis.mjs';
+import { sceneEditChecks } from './scene_edits.mjs';
 
 const CHROMIUM = process.env.BRDFA_CHROMIUM || '/usr/bin/chromium';
 
@@ -51,7 +52,7 @@ async function main() {
   try {
     const context = await browser.newContext({ viewport: { width: 1280, height: 720 } });
     const env = { server, context, artifacts: opt.artifacts, grab, variance, meanDiff, waitForFrame };
-    for (const [name, fn] of [...checks, ...layoutChecks, ...analysisChecks]) {
+    for (const [name, fn] of [...checks, ...sceneEditChecks, ...layoutChecks, ...analysisChecks]) {
       const t = Date.now();
       try {
         await fn(env);

@@ -1,6 +1,7 @@
 // Sends the latest value only: while a request is in flight, newer values replace each other
-// and the last one goes out when it returns. A slider drag or a held W key produces far more
-// changes than the server can apply; this keeps one PATCH in flight and never queues stale ones.
+// and the last one goes out when it returns. A slider drag produces far more changes than the
+// server can answer; this keeps one request in flight and never queues stale ones. (Edits of
+// the session scene go through scene-commands.js instead, which composes merge patches.)
 // With `merge`, a value waiting to be sent is combined with the newer one (merge(older, newer))
 // instead of replaced: for partial patches, where each holds different fields.
 export function coalesce(send, merge = (older, newer) => newer) {

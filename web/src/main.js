@@ -1,8 +1,9 @@
 // Entry point (bundled by build.mjs into dist/main.js): finds out who this page is (panels/auth.js:
 // the join or token screen until it knows), mounts the panels, then finds this tab's session and
 // loads the BRDF its first object uses. Panels only meet through state.js.
-// The editor (CodeMirror, 430 KB) is a dynamic import started once the first frame is on screen
-// (or after 1.5 s): on a small machine, parsing it would compete with the first pass for the CPU.
+// The editor (CodeMirror, the largest part of the bundle) is a dynamic import started once the
+// first frame is on screen (or after a short wait at most): on a small machine, parsing it would
+// compete with the first pass for the CPU.
 import { state, set, on } from './state.js';
 import { startSession, mountSessionPanel } from './panels/session.js';
 import { mountViewer } from './panels/viewer.js';

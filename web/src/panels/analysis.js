@@ -45,95 +45,92 @@ const MARKUP = `
     <figure><figcaption>Slice (φd 90°) <span class="an-slice-label hint"></span></figcaption><canvas class="an-slice"></canvas></figure>
   </div>`;
 
-export function mountAnalysis(el) {
-  el.innerHTML = MARKUP;
-  const $ = (c) => el.querySelector(c);
-  const theta = $('.an-theta');
-  const status = $('.an-status');
-  const legend = $('.an-legend');
-  const albedo = albedoPlot($('.an-albedo'));
-  let lobe = null;   // three.js loads with the tab's first showing
-  let series = [];
-  let chosen = null;   // key of the series whose sliders and slice are shown
-  const answers = {};  // kind -> {answer, colors}
-  const sent = {};     // kind -> the body of the answer shown
-  let retry = 0;
+const bodies = {
+  polar: (s) => ({ series: s.series.map(request), theta_i: s.thetaI }),
+  lobe: (s) => ({ series: s.series.map(request), theta_i: s.thetaI }),
+  albedo: (s) => ({ series: s.series.map(request) }),
+  slice: (s) => {
+    const one = s.series.find((x) => x.key === s.chosen) || s.series[0];
+    return { series: [request(one)], phi_d: 90, color: one.color };
+  },
+};
+/** The request of one plot for a snapshot, and its key (what it depends on). */
+const requestOf = (kind, snap) => {
+  const { color, ...wire } = bodies[kind](snap);
+  return { wire, key: JSON.stringify(wire), color };
+};
 
-  const shown = () => !el.closest('.tab-page')?.hidden;
-  const thetaI = () => Number(theta.value);
-  const snapshot = () => ({ series: series.map((s) => ({ ...s })), thetaI: thetaI(), chosen });
-  const bodies = {
-    polar: (s) => ({ series: s.series.map(request), theta_i: s.thetaI }),
-    lobe: (s) => ({ series: s.series.map(request), theta_i: s.thetaI }),
-    albedo: (s) => ({ series: s.series.map(request) }),
-    slice: (s) => {
-      const one = s.series.find((x) => x.key === s.chosen) || s.series[0];
-      return { series: [request(one)], phi_d: 90, color: one.color };
-    },
-  };
-
-  /** The request of one plot for a snapshot, and its key (what it depends on). */
-  const requestOf = (kind, snap) => {
-    const { color, ...wire } = bodies[kind](snap);
-    return { wire, key: JSON.stringify(wire), color };
-  };
-  const figure = (kind) => el.querySelector(`.an-${kind}`).closest('figure');
-  let latest = null;   // the newest snapshot asked for
-  const dim = (kind) => figure(kind).classList.toggle('stale', !!latest?.series.length && sent[kind] !== requestOf(kind, latest).key);
-
-  function draw(kind) {
-    const got = answers[kind];
+/** draw(kind): one plot from the answer it has (none: empty). */
+function makeDraw(a) {
+  const { $ } = a;
+  return function draw(kind) {
+    const got = a.answers[kind];
     const log = $('.an-log').checked;
-    if (kind === 'polar') drawPolar($('.an-polar'), got?.answer, { plane: $('.an-plane').value, log, thetaI: got?.answer?.theta_i ?? thetaI(), colors: got?.colors || [] });
+    if (kind === 'polar') drawPolar($('.an-polar'), got?.answer, { plane: $('.an-plane').value, log, thetaI: got?.answer?.theta_i ?? a.thetaI(), colors: got?.colors || [] });
     if (kind === 'slice') {
-      drawSlice($('.an-slice'), got?.answer, { log, thetaI: thetaI() });
+      drawSlice($('.an-slice'), got?.answer, { log, thetaI: a.thetaI() });
       $('.an-slice-label').textContent = got?.answer?.series?.[0]?.label || '';
     }
-    if (kind === 'albedo') albedo.set(got?.answer, got?.colors || []).then(() => albedo.marker(thetaI()));
-    if (kind === 'lobe' && lobe) {
-      const top = lobe.set(got?.answer, got?.colors || []);
+    if (kind === 'albedo') a.albedo.set(got?.answer, got?.colors || []).then(() => a.albedo.marker(a.thetaI()));
+    if (kind === 'lobe' && a.lobe) {
+      const top = a.lobe.set(got?.answer, got?.colors || []);
       $('.an-lobe').dataset.thetaI = String(got?.answer?.theta_i ?? '');
       $('.an-lobe-max').textContent = got?.answer ? `(largest f ${sig(top)})` : '';
     }
-  }
+  };
+}
+
+/** update(): asks for the plots whose request changed, one request at a time. */
+function makeUpdate(el, a) {
+  const sent = {};     // kind -> the body of the answer shown
+  let retry = 0;
+  let latest = null;   // the newest snapshot asked for
+  const snapshot = () => ({ series: a.series.map((s) => ({ ...s })), thetaI: a.thetaI(), chosen: a.chosen });
+  const figure = (kind) => el.querySelector(`.an-${kind}`).closest('figure');
+  const dim = (kind) => figure(kind).classList.toggle('stale', !!latest?.series.length && sent[kind] !== requestOf(kind, latest).key);
 
   // One request at a time; a newer state waiting makes the rest of this round stale.
   const refresh = coalesce(async (snap) => {
     const times = [];
     for (const kind of KINDS) {
       if (refresh.waiting()) return;
-      if (!snap.series.length) { answers[kind] = null; delete sent[kind]; draw(kind); continue; }
+      if (!snap.series.length) { a.answers[kind] = null; delete sent[kind]; a.draw(kind); continue; }
       const { wire, key } = requestOf(kind, snap);
       if (sent[kind] === key) continue;
       try {
         const answer = await api.analysis(kind, wire);
-        answers[kind] = { answer, colors: kind === 'slice' ? [requestOf(kind, snap).color] : snap.series.map((s) => s.color) };
+        a.answers[kind] = { answer, colors: kind === 'slice' ? [requestOf(kind, snap).color] : snap.series.map((s) => s.color) };
         sent[kind] = key;
         times.push(`${kind} ${Math.round(answer.ms)} ms`);
-        if (kind === 'polar') showNotes(answer);
-        draw(kind);
+        if (kind === 'polar') a.showNotes(answer);
+        a.draw(kind);
         dim(kind);
       } catch (e) {
-        status.textContent = `${kind}: ${e.message}`;
+        a.status.textContent = `${kind}: ${e.message}`;
         if (e.status === 503) { clearTimeout(retry); retry = setTimeout(update, RETRY_MS); }
         return;
       }
     }
-    if (times.length) status.textContent = times.join(' · ');
+    if (times.length) a.status.textContent = times.join(' · ');
   });
   // A plot whose request changed is dimmed until its answer is drawn.
-  const update = () => {
-    if (!shown()) return;
+  function update() {
+    if (!a.shown()) return;
     latest = snapshot();
     KINDS.forEach(dim);
     refresh(latest);
-  };
+  }
+  return update;
+}
 
-  // ---- the legend: one entry a series (choose it: its sliders and its slice; remove it) ----
+/** The legend: one entry a series (choose it: its sliders and its slice; remove it). */
+function makeLegend(a) {
+  const { $ } = a;
+  const legend = $('.an-legend');
   function showLegend() {
-    legend.replaceChildren(...series.map((s) => {
+    legend.replaceChildren(...a.series.map((s) => {
       const li = document.createElement('li');
-      li.className = s.key === chosen ? 'chosen' : '';
+      li.className = s.key === a.chosen ? 'chosen' : '';
       li.dataset.key = String(s.key);
       const pick = document.createElement('button');
       pick.type = 'button';
@@ -143,16 +140,16 @@ export function mountAnalysis(el) {
       swatch.style.background = s.color;
       pick.append(swatch, s.label);   // the label (a BRDF name) as text
       pick.title = 'show its parameters and its slice';
-      pick.addEventListener('click', () => { chosen = s.key; showLegend(); showParams(); update(); });
+      pick.addEventListener('click', () => { a.chosen = s.key; showLegend(); a.showParams(); a.update(); });
       const remove = document.createElement('button');
       remove.type = 'button';
       remove.className = 'an-remove';
       remove.textContent = '×';
       remove.setAttribute('aria-label', `remove ${s.label}`);
       remove.addEventListener('click', () => {
-        series = series.filter((x) => x !== s);
-        if (chosen === s.key) chosen = series[0]?.key ?? null;
-        changed();
+        a.series = a.series.filter((x) => x !== s);
+        if (a.chosen === s.key) a.chosen = a.series[0]?.key ?? null;
+        a.changed();
       });
       const notes = document.createElement('span');
       notes.className = 'an-notes';
@@ -160,55 +157,61 @@ export function mountAnalysis(el) {
       li.append(pick, remove, notes);
       return li;
     }));
-    legend.dataset.count = String(series.length);
-    $('.an-add').disabled = series.length >= MAX_SERIES;
+    legend.dataset.count = String(a.series.length);
+    $('.an-add').disabled = a.series.length >= MAX_SERIES;
   }
-  // What the server clamped (values outside a BRDF's range), beside the series it concerns.
-  function showNotes(answer) {
-    answer.series.forEach((a, i) => { if (series[i]?.label === a.label) series[i].notes = a.notes; });
-    showLegend();
-  }
+  return showLegend;
+}
 
-  function showParams() {
-    const s = series.find((x) => x.key === chosen);
+/** The series: add, clear, the presets' sets, and the chosen one's parameter sliders. */
+function mountSeries(a) {
+  const { $ } = a;
+  // What the server clamped (values outside a BRDF's range), beside the series it concerns.
+  a.showNotes = (answer) => {
+    answer.series.forEach((x, i) => { if (a.series[i]?.label === x.label) a.series[i].notes = x.notes; });
+    a.showLegend();
+  };
+  a.showParams = () => {
+    const s = a.series.find((x) => x.key === a.chosen);
     const host = $('.an-params');
     if (!s) { host.replaceChildren(); return; }
-    paramControls(host, s.decls, s.params, (values) => { s.params = values; update(); });
-  }
-
-  function changed() {
-    showLegend();
-    showParams();
-    update();
-  }
-
-  function add(name, params) {
-    if (series.length >= MAX_SERIES) return;
-    if (!state.library.some((b) => b.name === name)) { status.textContent = `${name} is not in the library`; return; }
-    const s = makeSeries(name, { library: state.library, object: state.scene?.objects?.[state.selected], taken: series, params });
-    series.push(s);
-    chosen = s.key;
-  }
-
-  $('.an-add').addEventListener('click', () => { add($('.an-add-brdf').value); changed(); });
-  $('.an-clear').addEventListener('click', () => { series = []; chosen = null; changed(); });
-  for (const b of el.querySelectorAll('.an-preset')) {
+    paramControls(host, s.decls, s.params, (values) => { s.params = values; a.update(); });
+  };
+  a.changed = () => {
+    a.showLegend();
+    a.showParams();
+    a.update();
+  };
+  a.add = (name, params) => {
+    if (a.series.length >= MAX_SERIES) return;
+    if (!state.library.some((b) => b.name === name)) { a.status.textContent = `${name} is not in the library`; return; }
+    const s = makeSeries(name, { library: state.library, object: state.scene?.objects?.[state.selected], taken: a.series, params });
+    a.series.push(s);
+    a.chosen = s.key;
+  };
+  $('.an-add').addEventListener('click', () => { a.add($('.an-add-brdf').value); a.changed(); });
+  $('.an-clear').addEventListener('click', () => { a.series = []; a.chosen = null; a.changed(); });
+  for (const b of a.el.querySelectorAll('.an-preset')) {
     b.addEventListener('click', () => {
-      series = [];
-      for (const p of PRESETS[b.dataset.preset]) add(p.brdf, p.params || {});
-      chosen = series[0]?.key ?? null;
-      changed();
+      a.series = [];
+      for (const p of PRESETS[b.dataset.preset]) a.add(p.brdf, p.params || {});
+      a.chosen = a.series[0]?.key ?? null;
+      a.changed();
     });
   }
-  theta.addEventListener('input', () => {
-    $('.an-theta-out').textContent = `${thetaI()}°`;
-    albedo.marker(thetaI());
-    draw('slice');
-    update();
-  });
-  $('.an-plane').addEventListener('change', () => draw('polar'));
-  $('.an-log').addEventListener('change', () => { draw('polar'); draw('slice'); });
+}
 
+/** θi, the plane and the log scale; the list of BRDFs to add. */
+function mountControls(a) {
+  const { $ } = a;
+  a.theta.addEventListener('input', () => {
+    $('.an-theta-out').textContent = `${a.thetaI()}°`;
+    a.albedo.marker(a.thetaI());
+    a.draw('slice');
+    a.update();
+  });
+  $('.an-plane').addEventListener('change', () => a.draw('polar'));
+  $('.an-log').addEventListener('change', () => { a.draw('polar'); a.draw('slice'); });
   // The library (analysable files only: legacy ones are rendered, not analysed).
   on('library', ({ library }) => {
     const sel = $('.an-add-brdf');
@@ -219,32 +222,56 @@ export function mountAnalysis(el) {
       return o;
     }));
     if (keep) sel.value = keep;
-    start();
+    a.start();
   });
+}
+
+export function mountAnalysis(el) {
+  el.innerHTML = MARKUP;
+  const $ = (c) => el.querySelector(c);
+  // What the sub-views share: the series, the chosen one, the answers drawn.
+  const a = {
+    el,
+    $,
+    theta: $('.an-theta'),
+    status: $('.an-status'),
+    albedo: albedoPlot($('.an-albedo')),
+    lobe: null,       // three.js loads with the tab's first showing
+    series: [],
+    chosen: null,     // key of the series whose sliders and slice are shown
+    answers: {},      // kind -> {answer, colors}
+    shown: () => !el.closest('.tab-page')?.hidden,
+  };
+  a.thetaI = () => Number(a.theta.value);
+  a.draw = makeDraw(a);
+  a.update = makeUpdate(el, a);
+  a.showLegend = makeLegend(a);
+  mountSeries(a);
 
   // First showing: load three.js, and start with the selected object's BRDF and values.
   let loading = null;
   let started = false;
-  function start() {
-    if (!shown() || !state.library.length || !state.scene) return;
+  a.start = () => {
+    if (!a.shown() || !state.library.length || !state.scene) return;
     if (!started) {
       started = true;
       const name = state.scene.objects?.[state.selected]?.brdf;
-      if (name) { add(name); $('.an-add-brdf').value = name; }
-      changed();
+      if (name) { a.add(name); $('.an-add-brdf').value = name; }
+      a.changed();
     }
     loading ||= import('../analysis-plots/lobe3d.js').then((m) => {
-      lobe = m.lobeView($('.an-lobe'));
-      draw('lobe');
+      a.lobe = m.lobeView($('.an-lobe'));
+      a.draw('lobe');
     }).catch((e) => { $('.an-lobe').textContent = `3D view unavailable: ${e.message}`; });
-    update();
-  }
-  on('tab', start);
-  on('scene', () => { if (!started) start(); });
+    a.update();
+  };
+  mountControls(a);
+  on('tab', a.start);
+  on('scene', () => { if (!started) a.start(); });
   window.addEventListener('resize', () => {
-    if (!shown()) return;
-    for (const kind of ['polar', 'slice']) draw(kind);
-    albedo.resize();
-    lobe?.resize();
+    if (!a.shown()) return;
+    for (const kind of ['polar', 'slice']) a.draw(kind);
+    a.albedo.resize();
+    a.lobe?.resize();
   });
 }

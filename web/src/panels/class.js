@@ -34,7 +34,8 @@ export function addClassTab(nav, before) {
   return el;
 }
 
-export function mountClass(el) {
+/** The tab's fixed elements: a head with a status line, the watched view, the list. */
+function buildPage(el) {
   const head = make('div', 'row');
   const status = make('span', 'class-status hint');
   status.setAttribute('role', 'status');
@@ -55,7 +56,11 @@ export function mountClass(el) {
   const list = make('ul', 'class-list');
   list.setAttribute('aria-label', 'sessions');
   el.append(head, watch, list);
+  return { status, watch, watchName, close, big, list };
+}
 
+export function mountClass(el) {
+  const { status, watch, watchName, close, big, list } = buildPage(el);
   const items = new Map();   // session id -> {li, img, owner, loading}
   let watched = null;        // the session shown full size
   let nonce = 0;

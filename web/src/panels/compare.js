@@ -3,11 +3,12 @@
 // streamed beside the main view (A) under the same camera, environment and render settings:
 // every scene change of A is mirrored into B (PUT, one at a time, the latest winning). Below,
 // A - B (GET /api/sessions/{a}/difference?against={b}) on its diverging colour map with its
-// colour bar and the relative RMS difference with its standard error, refreshed every 500 ms
+// colour bar and the relative RMS difference with its standard error, refreshed every PERIOD_MS
 // while either view gains samples. Closing deletes B; so does leaving the page.
 import * as api from '../api.js';
-import { state, set, on } from '../state.js';
+import { state, on } from '../state.js';
 import { coalesce } from '../coalesce.js';
+import { reloadScene } from '../scene-commands.js';
 import { paramControls, defaults } from '../param-controls.js';
 import { prepare, widthOf } from '../analysis-plots/canvas.js';
 import { drawColourBar } from '../analysis-plots/heatmap.js';
@@ -33,145 +34,123 @@ const MARKUP = `
       <div class="sbs-rms" title="relative RMS difference over A's object, both images' noise taken out, ± its standard error"></div></figure>
   </div>`;
 
-export function mountCompare(el) {
-  el.innerHTML = MARKUP;
-  const $ = (c) => el.querySelector(c);
-  const stateText = $('.sbs-state');
-  const view = $('.sbs-b');
-  const overlay = $('.sbs-view .overlay');
-  const diff = $('.sbs-diff');
-  let b = null;         // {id, index}: the open comparison
-  let choice = null;    // {brdf, decls, params}: what B renders
-  let lastSent = '';
-  let timer = 0;
-  let nonce = 0;
-  let diffUrl = '';
-  let seen = '';        // the samples (A, B) of the difference on screen
+/** The colour bar of the difference: -range (B brighter) to +range (A brighter). */
+function showBar(canvas, range) {
+  const g = prepare(canvas, widthOf(canvas, 120), 34);
+  const ticks = [{ pos: 0, label: `−${sig(range)} (B brighter)` }, { pos: 0.5, label: '0' }, { pos: 1, label: `+${sig(range)} (A brighter)` }];
+  drawColourBar(g, { x: 1, y: 2, w: widthOf(canvas, 120) - 2, h: 12 }, (p) => diverging(2 * p - 1), ticks, false);
+}
 
-  const object = () => state.scene?.objects?.[b ? b.index : state.selected];
-  /** A's scene with its object's BRDF and values replaced by B's choice. */
-  const mirror = () => {
-    const scene = structuredClone(state.scene);
-    delete scene.notes;   // the server works notes out again
-    const o = scene.objects[b ? b.index : state.selected];
-    if (o) Object.assign(o, { brdf: choice.brdf, params: choice.params });
-    return scene;
-  };
-  const send = coalesce(async (scene) => {
-    const text = JSON.stringify(scene);
-    if (!b || text === lastSent) return;
-    try {
-      await api.putScene(b.id, scene);
-      lastSent = text;
-      stateText.textContent = '';
-    } catch (e) {
-      stateText.textContent = `B: ${e.message}`;
-    }
-  });
-  const mirrorNow = () => { if (b && choice) send(mirror()); };
-
-  // ---- what B renders: a BRDF of the library and its values ----
+/** What B renders: a BRDF of the library and its values; A's scene is mirrored into B. */
+function mountChoice(c) {
+  const { $ } = c;
+  const object = () => state.scene?.objects?.[c.b ? c.b.index : state.selected];
   function choose(name) {
     const decls = state.library.find((x) => x.name === name)?.params || [];
     const o = object();
     // The same BRDF starts from A's values (then differs by a slider), another from its defaults.
     const params = o?.brdf === name ? { ...defaults(decls), ...o.params } : defaults(decls);
-    choice = { brdf: name, decls, params };
-    paramControls($('.sbs-params'), decls, params, (values) => { choice.params = values; mirrorNow(); });
+    c.choice = { brdf: name, decls, params };
+    paramControls($('.sbs-params'), decls, params, (values) => { c.choice.params = values; c.mirrorNow(); });
     $('.sbs-name').textContent = name;
-    mirrorNow();
+    c.mirrorNow();
   }
   $('.sbs-brdf').addEventListener('change', (ev) => choose(ev.target.value));
   on('library', ({ library }) => {
     const sel = $('.sbs-brdf');
-    const keep = choice?.brdf || object()?.brdf;
+    const keep = c.choice?.brdf || object()?.brdf;
     sel.replaceChildren(...library.filter((x) => !x.broken).map((x) => {
       const o = document.createElement('option');
       o.value = o.textContent = x.name;
       return o;
     }));
     if (keep && library.some((x) => x.name === keep)) sel.value = keep;
-    if (!choice && sel.value) choose(sel.value);
+    if (!c.choice && sel.value) choose(sel.value);
   });
-  on('scene', mirrorNow);
+  on('scene', c.mirrorNow);
+}
 
-  // ---- B's stream, its stats and the difference: while the tab is shown ----
+/** B's stream, its stats and the difference, while the tab is shown. Returns watch(). */
+function mountWatch(el, c) {
+  const { $, view } = c;
+  const overlay = $('.sbs-view .overlay');
+  let nonce = 0;
+  let diffUrl = '';
   // Elsewhere B's stream closes and it stops rendering (unwatched), leaving the CPU to A.
-  const watching = () => b?.id && state.visible && !el.closest('.tab-page')?.hidden;
+  const watching = () => c.b?.id && state.visible && !el.closest('.tab-page')?.hidden;
   const connect = () => {
-    if (watching()) view.src = api.streamUrl(b.id, nonce++);
+    if (watching()) view.src = api.streamUrl(c.b.id, nonce++);
   };
   view.addEventListener('error', () => { if (watching()) setTimeout(connect, 1000); });
 
-  function showBar(range) {
-    const canvas = $('.sbs-bar');
-    const g = prepare(canvas, widthOf(canvas, 120), 34);
-    const ticks = [{ pos: 0, label: `−${sig(range)} (B brighter)` }, { pos: 0.5, label: '0' }, { pos: 1, label: `+${sig(range)} (A brighter)` }];
-    drawColourBar(g, { x: 1, y: 2, w: widthOf(canvas, 120) - 2, h: 12 }, (p) => diverging(2 * p - 1), ticks, false);
+  /** A new difference while either view gains samples (or after a restart), once more at the
+   *  end; not before both have an error estimate (the server answers 400 until then). */
+  async function showDifference(id, s) {
+    const key = `${state.stats?.spp}/${s.spp}`;
+    if (key === c.seen || s.rel_error == null || state.stats?.rel_error == null) return;
+    const d = await api.getDifference(state.session, id);
+    if (c.b?.id !== id) return;
+    c.seen = key;
+    if (diffUrl) URL.revokeObjectURL(diffUrl);
+    diffUrl = URL.createObjectURL(d.image);
+    c.diff.src = diffUrl;
+    showBar($('.sbs-bar'), d.range);
+    $('.sbs-rms').textContent = `relative RMS difference ${errPct(d.relRms)} ± ${errPct(d.relRmsError)} ` +
+      `(A ${d.samples[0]} spp, B ${d.samples[1]} spp)`;
   }
-
   let polling = false;   // one loop: a poll in flight schedules the next
   async function poll() {
-    clearTimeout(timer);
+    clearTimeout(c.timer);
     if (!watching() || polling) return;
-    const id = b.id;
+    const id = c.b.id;
     polling = true;
     try {
       const s = await api.getStats(id);
       overlay.textContent = `${s.spp} spp · err ${errPct(s.rel_error)}${s.done ? ' · done' : ''}`;
-      // A new difference while either view gains samples (or after a restart), once more at
-      // the end; not before both have an error estimate (the server answers 400 until then).
-      const key = `${state.stats?.spp}/${s.spp}`;
-      if (key !== seen && s.rel_error != null && state.stats?.rel_error != null) {
-        const d = await api.getDifference(state.session, id);
-        if (b?.id !== id) return;
-        seen = key;
-        if (diffUrl) URL.revokeObjectURL(diffUrl);
-        diffUrl = URL.createObjectURL(d.image);
-        diff.src = diffUrl;
-        showBar(d.range);
-        $('.sbs-rms').textContent = `relative RMS difference ${errPct(d.relRms)} ± ${errPct(d.relRmsError)} ` +
-          `(A ${d.samples[0]} spp, B ${d.samples[1]} spp)`;
-      }
+      await showDifference(id, s);
     } catch (e) {
       // 400 until both views have an error estimate: the first passes.
       $('.sbs-rms').textContent = e.status === 400 ? 'waiting for samples…' : `difference: ${e.message}`;
     } finally {
       polling = false;
     }
-    if (b?.id === id) timer = setTimeout(poll, PERIOD_MS);
+    if (c.b?.id === id) c.timer = setTimeout(poll, PERIOD_MS);
   }
   const watch = () => {
     if (watching()) { connect(); poll(); return; }
-    clearTimeout(timer);
+    clearTimeout(c.timer);
     view.removeAttribute('src');
   };
   on('visible', watch);
   on('tab', watch);
+  return watch;
+}
 
-  // ---- open and close ----
+/** Compare opens B beside A; Close (or leaving the page) deletes it. */
+function mountOpenClose(el, c, watch) {
+  const { $, stateText } = c;
   $('.sbs-open').addEventListener('click', async () => {
-    if (b || !choice || !state.scene) return;
+    if (c.b || !c.choice || !state.scene) return;
     stateText.textContent = 'starting B…';
     $('.sbs-open').disabled = true;
     try {
       // The server's scene, not only what this page last heard: a script may have changed it.
-      set({ scene: await api.getScene(state.session) });
+      await reloadScene();
       const index = state.selected;
-      b = { id: null, index };
-      const scene = mirror();
+      c.b = { id: null, index };
+      const scene = c.mirror();
       // Beside A: behind several replicas the difference needs both sessions on one server.
       const created = await api.createSession(scene, state.session);
-      b.id = created.id;
-      lastSent = JSON.stringify(scene);
+      c.b.id = created.id;
+      c.lastSent = JSON.stringify(scene);
       el.dataset.session = created.id;
       stateText.textContent = `B is session ${created.id} (object ${index + 1} replaced)`;
       $('.sbs-close').hidden = false;
       $('.sbs-open').hidden = true;
       watch();
-      mirrorNow();   // a change of A while B was being made
+      c.mirrorNow();   // a change of A while B was being made
     } catch (e) {
-      b = null;
+      c.b = null;
       stateText.textContent = `compare: ${e.message}`;
     } finally {
       $('.sbs-open').disabled = false;
@@ -179,17 +158,17 @@ export function mountCompare(el) {
   });
 
   async function close() {
-    if (!b?.id) return;
-    const id = b.id;
-    b = null;
-    clearTimeout(timer);
-    view.removeAttribute('src');
-    diff.removeAttribute('src');
-    overlay.textContent = '';
+    if (!c.b?.id) return;
+    const id = c.b.id;
+    c.b = null;
+    clearTimeout(c.timer);
+    c.view.removeAttribute('src');
+    c.diff.removeAttribute('src');
+    $('.sbs-view .overlay').textContent = '';
     $('.sbs-rms').textContent = '';
     delete el.dataset.session;
-    seen = '';
-    lastSent = '';
+    c.seen = '';
+    c.lastSent = '';
     $('.sbs-close').hidden = true;
     $('.sbs-open').hidden = false;
     try {
@@ -201,5 +180,46 @@ export function mountCompare(el) {
   }
   $('.sbs-close').addEventListener('click', close);
   // Leaving the page: a DELETE that outlives it (sendBeacon can only POST).
-  window.addEventListener('pagehide', () => { if (b?.id) api.deleteSession(b.id, { keepalive: true }); });
+  window.addEventListener('pagehide', () => { if (c.b?.id) api.deleteSession(c.b.id, { keepalive: true }); });
+}
+
+export function mountCompare(el) {
+  el.innerHTML = MARKUP;
+  const $ = (q) => el.querySelector(q);
+  // What the sub-views share.
+  const c = {
+    $,
+    stateText: $('.sbs-state'),
+    view: $('.sbs-b'),
+    diff: $('.sbs-diff'),
+    b: null,         // {id, index}: the open comparison
+    choice: null,    // {brdf, decls, params}: what B renders
+    lastSent: '',
+    timer: 0,
+    seen: '',        // the samples (A, B) of the difference on screen
+  };
+  /** A's scene with its object's BRDF and values replaced by B's choice. */
+  c.mirror = () => {
+    const scene = structuredClone(state.scene);
+    delete scene.notes;   // the server works notes out again
+    const o = scene.objects[c.b ? c.b.index : state.selected];
+    if (o) Object.assign(o, { brdf: c.choice.brdf, params: c.choice.params });
+    return scene;
+  };
+  const send = coalesce(async (scene) => {
+    const text = JSON.stringify(scene);
+    if (!c.b || text === c.lastSent) return;
+    try {
+      await api.putScene(c.b.id, scene);
+      c.lastSent = text;
+      c.stateText.textContent = '';
+    } catch (e) {
+      c.stateText.textContent = `B: ${e.message}`;
+    }
+  });
+  c.mirrorNow = () => { if (c.b && c.choice) send(c.mirror()); };
+
+  mountChoice(c);
+  const watch = mountWatch(el, c);
+  mountOpenClose(el, c, watch);
 }

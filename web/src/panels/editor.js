@@ -12,6 +12,7 @@ import { shader } from '@codemirror/legacy-modes/mode/clike';
 import { setDiagnostics, lintGutter } from '@codemirror/lint';
 import * as api from '../api.js';
 import { state, set, on } from '../state.js';
+import { editScene, reloadScene } from '../scene-commands.js';
 import { refreshLibrary, NAME_RE, bareName, namespace, ownName, canWrite, canDelete } from '../library.js';
 
 const IDLE_MS = 800;   // a pause in typing this long compiles
@@ -42,6 +43,14 @@ function keptParams(old, decls) {
   return out;
 }
 
+/** The selected object renders `name`, keeping the values that still fit; resolves once the server answered. */
+function switchObject(name, decls) {
+  const sel = state.selected;
+  return editScene((scene) => ({
+    objects: scene.objects.map((o, i) => (i === sel ? { ...o, brdf: name, params: keptParams(o.params, decls) } : o)),
+  }));
+}
+
 // What New starts from: one parameter of each kind and a Lambert + Blinn-Phong lobe.
 export const TEMPLATE = `analytic
 # my_brdf: describe the model and cite its source here.
@@ -69,47 +78,45 @@ vec3 BRDF(vec3 L, vec3 V, vec3 N, vec3 X, vec3 Y)
 ::end shader
 `;
 
-export function mountEditor(el, libEl) {
-  const list = el.querySelector('.diagnostics');
-  const status = el.querySelector('.status');
+/** The CodeMirror view: GLSL highlighting, lint gutter, Ctrl+Enter and a pause in typing compile. */
+function createView(el, ed) {
   let idle = 0;
-  let busy = false;
-  let again = false;
-  let stored = null;        // the text the server last accepted (scratch or a saved name)
-
-  const view = new EditorView({
+  ed.stopIdle = () => clearTimeout(idle);
+  return new EditorView({
     parent: el.querySelector('.editor-host'),
     extensions: [
       basicSetup,
       StreamLanguage.define(shader),
       lintGutter(),
-      Prec.highest(keymap.of([{ key: 'Mod-Enter', run: () => { compile(); return true; } }])),
+      Prec.highest(keymap.of([{ key: 'Mod-Enter', run: () => { ed.compile(); return true; } }])),
       EditorView.updateListener.of((u) => {
         // Only the user's edits start the idle timer, not loading a BRDF's source.
-        if (u.docChanged) queueMicrotask(showLibrary);   // the "unsaved changes" mark
+        if (u.docChanged) queueMicrotask(ed.showLibrary);   // the "unsaved changes" mark
         if (!u.docChanged || !u.transactions.some((tr) => tr.annotation(Transaction.userEvent))) return;
         clearTimeout(idle);
-        idle = setTimeout(compile, IDLE_MS);
+        idle = setTimeout(ed.compile, IDLE_MS);
       }),
     ],
   });
+}
 
-  async function compile() {
-    clearTimeout(idle);
+/** compile(): the text into this tab's scratch BRDF, which the selected object then renders. */
+function makeCompile(ed) {
+  let busy = false;
+  let again = false;
+  return async function compile() {
+    ed.stopIdle();
     if (!state.session || !state.scene) return;
     if (busy) { again = true; return; }   // one compile at a time; the newest text runs next
     busy = true;
-    const source = view.state.doc.toString();
+    const source = ed.text();
     const name = scratchName(state.session);
     set({ status: 'compiling…' });
     try {
       const brdf = await api.putBrdf(name, source);
-      const sel = state.selected;
-      const params = keptParams(state.scene.objects[sel]?.params, brdf.params);
-      const objects = state.scene.objects.map((o, i) => (i === sel ? { ...o, brdf: name, params } : o));
-      const scene = await api.patchScene(state.session, { objects });
-      stored = source;
-      set({ scene, brdf: { name, params: brdf.params }, diagnostics: brdf.warnings || [],
+      await switchObject(name, brdf.params);
+      ed.stored = source;
+      set({ brdf: { name, params: brdf.params }, diagnostics: brdf.warnings || [],
             status: brdf.cached ? 'compiled (cached)' : `compiled in ${brdf.compile_ms.toFixed(0)} ms` });
     } catch (e) {
       const diagnostics = e.body?.diagnostics || [];
@@ -118,8 +125,13 @@ export function mountEditor(el, libEl) {
       busy = false;
       if (again) { again = false; compile(); }
     }
-  }
+  };
+}
 
+/** Compile diagnostics as lint markers and as a list; the status line. */
+function mountDiagnostics(el, view) {
+  const list = el.querySelector('.diagnostics');
+  const status = el.querySelector('.status');
   on('diagnostics', ({ diagnostics }) => {
     const doc = view.state.doc;
     view.dispatch(setDiagnostics(view.state, diagnostics.map((d) => toCm(doc, d))));
@@ -131,18 +143,12 @@ export function mountEditor(el, libEl) {
     }));
   });
   on('status', ({ status: s }) => { status.textContent = s; });
-  el.querySelector('.compile').addEventListener('click', compile);
+}
 
-  // ---- library: open, New, Save, Save as, Revert, Delete ----
-  const $ = (c) => libEl.querySelector(c);
-  const select = $('.library-list');
-  const text = () => view.state.doc.toString();
-  /** Differs from the version saved under a name (or, untitled, from what it started as). */
-  const unsaved = () => state.editing && text() !== state.editing.source;
-  const okToDiscard = () => !unsaved() || confirm('The editor has unsaved changes. Discard them?');
-  const load = (source) => view.dispatch({ changes: { from: 0, to: view.state.doc.length, insert: source } });
-
-  function showLibrary() {
+/** The library list, and what Save and Delete may do for the text the editor holds. */
+function makeShowLibrary(ed) {
+  const { $ } = ed;
+  return function showLibrary() {
     const cur = state.editing?.name;
     const opts = state.library.map((b) => {
       const o = document.createElement('option');
@@ -156,35 +162,29 @@ export function mountEditor(el, libEl) {
       o.textContent = '(untitled)';
       opts.unshift(o);
     }
-    select.replaceChildren(...opts);
-    select.value = cur && state.library.some((b) => b.name === cur) ? cur : '';
+    ed.select.replaceChildren(...opts);
+    ed.select.value = cur && state.library.some((b) => b.name === cur) ? cur : '';
     const e = state.editing;
     const readOnly = e?.builtin || (e?.name && !canWrite(e.name));
     $('.lib-save').disabled = !e?.name || readOnly;
     $('.lib-delete').disabled = !e?.name || e.builtin || !canDelete(e.name);
     $('.library-state').textContent = !e ? '' : (readOnly ? 'read-only: Save as makes a copy' : '') +
-      (unsaved() ? ' · unsaved changes' : '');
-  }
-  on('library', showLibrary);
-  on('editing', showLibrary);
-  // Leaving loses only text the server never got (scratch compiles are stored).
-  window.addEventListener('beforeunload', (ev) => {
-    if (stored !== null && text() !== stored) { ev.preventDefault(); ev.returnValue = ''; }
-  });
+      (ed.unsaved() ? ' · unsaved changes' : '');
+  };
+}
 
-  /** The selected object switches to `name` (kept parameter values that still fit). */
-  async function useForObject(name, params) {
-    const sel = state.selected;
-    const kept = keptParams(state.scene.objects[sel]?.params, params);
-    const objects = state.scene.objects.map((o, i) => (i === sel ? { ...o, brdf: name, params: kept } : o));
-    set({ scene: await api.patchScene(state.session, { objects }), brdf: { name, params } });
-  }
+/** The selected object switches to `name` (kept parameter values that still fit). */
+async function useForObject(name, params) {
+  await switchObject(name, params);
+  set({ brdf: { name, params } });
+}
 
-  /** Opens a library BRDF: its text in the editor, and the selected object renders it. */
-  async function open(name, { apply = true } = {}) {
+/** open(name): a library BRDF's text in the editor, and (with `apply`) the selected object renders it. */
+function makeOpen(ed) {
+  return async function open(name, { apply = true } = {}) {
     const b = await api.getBrdf(name);
-    load(b.source);
-    stored = b.source;
+    ed.load(b.source);
+    ed.stored = b.source;
     const scratch = name === scratchName(state.session);
     set({ editing: { name: scratch ? null : b.name, builtin: b.builtin, source: b.source }, diagnostics: b.error?.diagnostics || [] });
     if (b.broken) { set({ status: `"${name}" does not parse: fix it and Save` }); return; }
@@ -193,27 +193,17 @@ export function mountEditor(el, libEl) {
     set({ status: scratch ? 'editing this tab\'s scratch BRDF (Save as to keep it)'
       : b.builtin ? `viewing built-in "${b.name}" (read-only: edits compile into a scratch copy)`
         : !canWrite(b.name) ? `viewing "${b.name}" (read-only: Save as makes your own copy)` : `editing "${b.name}"` });
-  }
+  };
+}
 
-  select.addEventListener('change', async () => {
-    const name = select.value;
-    if (!name) return;
-    if (!okToDiscard()) { showLibrary(); return; }
-    try { await open(name); } catch (e) { set({ status: `open: ${e.message}` }); showLibrary(); }
-  });
-
-  $('.lib-new').addEventListener('click', () => {
-    if (!okToDiscard()) return;
-    load(TEMPLATE);
-    set({ editing: { name: null, builtin: false, source: TEMPLATE }, status: 'new BRDF from the template (Save as to name it)' });
-    compile();
-  });
-
+/** Save and Save as: store the text under a name, which the selected object then renders. */
+function mountSave(ed) {
+  const { $ } = ed;
   async function saveAs(name) {
-    const source = text();
+    const source = ed.text();
     try {
       const b = await api.putBrdf(name, source);
-      stored = source;
+      ed.stored = source;
       set({ editing: { name, builtin: false, source }, diagnostics: b.warnings || [], status: `saved "${name}"` });
       await useForObject(name, b.params);
       await refreshLibrary();
@@ -240,49 +230,97 @@ export function mountEditor(el, libEl) {
     if (existing && !confirm(`Replace the saved BRDF "${name}"?`)) return;
     saveAs(name);
   });
-  $('.lib-revert').addEventListener('click', async () => {
-    const e = state.editing;
-    if (!e || !unsaved() || !confirm('Revert to the saved text? Your changes are lost.')) return;
-    if (e.name) { try { await open(e.name); } catch (err) { set({ status: `revert: ${err.message}` }); } return; }
-    load(e.source);
-    compile();
-  });
-  $('.lib-delete').addEventListener('click', async () => {
+}
+
+/** Delete: the BRDF goes; objects that render it switch to this tab's scratch copy of its text. */
+function mountDelete(ed) {
+  ed.$('.lib-delete').addEventListener('click', async () => {
     const e = state.editing;
     if (!e?.name || e.builtin || !canDelete(e.name) || !confirm(`Delete "${e.name}" and its presets? Objects using it keep rendering a scratch copy.`)) return;
     try {
-      // The server's scene, not only this page's copy: the reply to a switch to this BRDF made
-      // just before may not have arrived yet, while the server already renders it.
-      const scene = (await api.getScene(state.session).catch(() => null)) || state.scene;
-      const users = [scene, state.scene].some((sc) => sc.objects.some((o) => o.brdf === e.name));
-      if (users) {   // a scene cannot name a deleted BRDF: move its objects to this tab's scratch copy
+      // The server's scene, not only this page's copy: a script may have changed it. The
+      // local scene holds every edit of this page too (one not answered yet included).
+      await reloadScene().catch(() => null);
+      if (state.scene.objects.some((o) => o.brdf === e.name)) {
+        // A scene cannot name a deleted BRDF: move its objects to this tab's scratch copy.
         const scratch = scratchName(state.session);
         await api.putBrdf(scratch, e.source);
-        const objects = scene.objects.map((o) => (o.brdf === e.name ? { ...o, brdf: scratch } : o));
-        set({ scene: await api.patchScene(state.session, { objects }) });
+        await editScene((scene) => ({ objects: scene.objects.map((o) => (o.brdf === e.name ? { ...o, brdf: scratch } : o)) }));
         if (state.brdf?.name === e.name) set({ brdf: { ...state.brdf, name: scratch } });
       }
       await api.deleteBrdf(e.name);
-      set({ editing: { name: null, builtin: false, source: text() }, status: `deleted "${e.name}"` });
+      set({ editing: { name: null, builtin: false, source: ed.text() }, status: `deleted "${e.name}"` });
       await refreshLibrary();
     } catch (err) {
       set({ status: `delete: ${err.message}` });
     }
   });
+}
+
+/** Opening from the list, New and Revert. */
+function mountOpenNewRevert(ed) {
+  const { $, select } = ed;
+  select.addEventListener('change', async () => {
+    const name = select.value;
+    if (!name) return;
+    if (!ed.okToDiscard()) { ed.showLibrary(); return; }
+    try { await ed.open(name); } catch (e) { set({ status: `open: ${e.message}` }); ed.showLibrary(); }
+  });
+  $('.lib-new').addEventListener('click', () => {
+    if (!ed.okToDiscard()) return;
+    ed.load(TEMPLATE);
+    set({ editing: { name: null, builtin: false, source: TEMPLATE }, status: 'new BRDF from the template (Save as to name it)' });
+    ed.compile();
+  });
+  $('.lib-revert').addEventListener('click', async () => {
+    const e = state.editing;
+    if (!e || !ed.unsaved() || !confirm('Revert to the saved text? Your changes are lost.')) return;
+    if (e.name) { try { await ed.open(e.name); } catch (err) { set({ status: `revert: ${err.message}` }); } return; }
+    ed.load(e.source);
+    ed.compile();
+  });
+}
+
+export function mountEditor(el, libEl) {
+  // What the sub-views share: the view, the text the server last accepted (scratch or a saved
+  // name), and the operations on them.
+  const ed = { stored: null, $: (c) => libEl.querySelector(c) };
+  ed.select = ed.$('.library-list');
+  ed.compile = makeCompile(ed);
+  ed.showLibrary = makeShowLibrary(ed);
+  ed.open = makeOpen(ed);
+  const view = createView(el, ed);
+  ed.text = () => view.state.doc.toString();
+  ed.load = (source) => view.dispatch({ changes: { from: 0, to: view.state.doc.length, insert: source } });
+  /** Differs from the version saved under a name (or, untitled, from what it started as). */
+  ed.unsaved = () => state.editing && ed.text() !== state.editing.source;
+  ed.okToDiscard = () => !ed.unsaved() || confirm('The editor has unsaved changes. Discard them?');
+
+  mountDiagnostics(el, view);
+  el.querySelector('.compile').addEventListener('click', ed.compile);
+  on('library', ed.showLibrary);
+  on('editing', ed.showLibrary);
+  // Leaving loses only text the server never got (scratch compiles are stored).
+  window.addEventListener('beforeunload', (ev) => {
+    if (ed.stored !== null && ed.text() !== ed.stored) { ev.preventDefault(); ev.returnValue = ''; }
+  });
+  mountOpenNewRevert(ed);
+  mountSave(ed);
+  mountDelete(ed);
 
   // The selected object changed, or switched to another BRDF (the Objects tab): show its text, unless
   // the user keeps unsaved text.
   on('brdf', ({ brdf }) => {
     if (!brdf || brdf.name === scratchName(state.session) || brdf.name === state.editing?.name) return;
-    if (unsaved() && !confirm(`Object ${state.selected + 1} uses "${brdf.name}". Load its text into the editor and discard your changes?`)) return;
-    open(brdf.name, { apply: false }).catch((e) => set({ status: `open: ${e.message}` }));
+    if (ed.unsaved() && !confirm(`Object ${state.selected + 1} uses "${brdf.name}". Load its text into the editor and discard your changes?`)) return;
+    ed.open(brdf.name, { apply: false }).catch((e) => set({ status: `open: ${e.message}` }));
   });
 
-  showLibrary();
+  ed.showLibrary();
   return {
     /** Replaces the text without compiling (loading a BRDF). */
-    load,
+    load: ed.load,
     /** The BRDF the selected object uses at start: shown, not re-applied. */
-    openInitial: (name) => open(name, { apply: false }),
+    openInitial: (name) => ed.open(name, { apply: false }),
   };
 }

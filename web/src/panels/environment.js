@@ -1,33 +1,18 @@
 // Environment: choose a built-in, Blender world or uploaded environment, or upload one (HDR,
 // EXR, or a PNG/JPEG horizontal cross); intensity, rotation about +Y, visible as background.
 import * as api from '../api.js';
-import { state, set, on } from '../state.js';
-import { coalesce } from '../coalesce.js';
+import { state, on } from '../state.js';
+import { editScene } from '../scene-commands.js';
 import { refreshAssets } from '../library.js';
 
 export function mountEnvironment(el) {
   const $ = (c) => el.querySelector(c);
   const status = $('.env-status');
-  // Each control sends only its own field: while one PATCH is in flight, the others' changes
-  // merge (a newer value of the same field wins), so none is lost on a slow server.
-  // Fields changed here and not yet answered: a scene that arrives meanwhile (the reply to an
-  // earlier PATCH, a camera move) must not put the old value back into their controls.
-  const pending = {};
-  const patch = coalesce(async (environment) => {
-    try {
-      set({ scene: await api.patchScene(state.session, { environment }) });
-      status.textContent = '';
-    } catch (e) {
-      status.textContent = e.message;
-    } finally {
-      for (const [k, v] of Object.entries(environment)) if (pending[k] === v) delete pending[k];
-      if (shown()) show();
-    }
-  }, (older, newer) => ({ ...older, ...newer }));
-  const send = (fields) => {
-    Object.assign(pending, fields);
-    patch(fields);
-  };
+  // Each control edits only its own field: while one PATCH is in flight, the others' changes
+  // compose with it (scene-commands.js), so none is lost on a slow server, and the local scene
+  // holds them at once: a reply to an earlier PATCH does not put an old value back.
+  const send = (fields) => editScene({ environment: fields })
+    .then(() => { status.textContent = ''; }, (e) => { status.textContent = e.message; });
   const focused = (x) => document.activeElement === x;
 
   function show() {
@@ -35,15 +20,15 @@ export function mountEnvironment(el) {
     if (!env) return;
     const names = (state.assets || []).filter((a) => a.kind === 'environment');
     const sel = $('.env-name');
-    if (!focused(sel) && !('name' in pending)) {
+    if (!focused(sel)) {
       const opts = names.map((a) => { const o = document.createElement('option'); o.value = a.id; o.textContent = a.builtin ? a.id : `${a.name} (${a.id})`; return o; });
       if (!names.some((a) => a.id === env.name)) { const o = document.createElement('option'); o.value = o.textContent = env.name; opts.push(o); }
       sel.replaceChildren(...opts);
       sel.value = env.name;
     }
-    if (!focused($('.env-intensity')) && !('intensity' in pending)) $('.env-intensity').value = env.intensity;
-    if (!focused($('.env-rotation')) && !('rotation' in pending)) $('.env-rotation').value = env.rotation;
-    if (!('visible' in pending)) $('.env-visible').checked = env.visible;
+    if (!focused($('.env-intensity'))) $('.env-intensity').value = env.intensity;
+    if (!focused($('.env-rotation'))) $('.env-rotation').value = env.rotation;
+    $('.env-visible').checked = env.visible;
   }
   // Rebuilt only while its tab is shown: a camera drag answers a scene many times a second.
   const shown = () => !el.closest('.tab-page')?.hidden;

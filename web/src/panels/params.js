@@ -1,98 +1,83 @@
 // Parameters: sliders, colour pickers and check boxes built from the declarations of the BRDF
 // that the selected object uses (state.brdf.params; state.selected, chosen in the Objects tab).
-// Moving one PATCHes objects[selected].params: the server
-// applies value-only changes without recompiling, so the frame updates within a pass.
+// Moving one edits objects[selected].params (scene-commands.js): the server applies
+// value-only changes without recompiling, so the frame updates within a pass.
 import * as api from '../api.js';
 import { state, set, on } from '../state.js';
-import { coalesce } from '../coalesce.js';
+import { editScene } from '../scene-commands.js';
 import { toHex, fromHex } from '../color.js';
 import { NAME_RE, isScratch } from '../library.js';
 
+/** The value a control holds, as the scene stores it. */
+const readValue = (decl, input) => {
+  if (decl.type === 'color') return fromHex(input.value);
+  if (decl.type === 'bool') return input.checked;
+  return Number(input.value);
+};
+/** Shows `v` in control `c` ({decl, input, readout}); undefined leaves it as it is. */
+const showValue = (c, v) => {
+  if (v === undefined) return;
+  if (c.decl.type === 'color') c.input.value = toHex(v);
+  else if (c.decl.type === 'bool') c.input.checked = !!v;
+  else c.input.value = v;
+  c.readout.textContent = c.decl.type === 'float' ? Number(v).toPrecision(3) : '';
+};
 
-export function mountParams(el) {
-  const list = el.querySelector('.params-list');
-  const controls = new Map();   // param name -> {decl, input, readout}
+/** The selected object's parameter values (a copy). */
+const current = () => ({ ...(state.scene?.objects?.[state.selected]?.params || {}) });
 
-  // `objects` is an array: a merge patch replaces it whole, so send every object.
-  const send = coalesce(async ({ index, params }) => {
-    const objects = state.scene.objects.map((o, i) => (i === index ? { ...o, params } : o));
-    try {
-      set({ scene: await api.patchScene(state.session, { objects }) });
-    } catch (e) {
-      set({ status: `parameters: ${e.message}` });
-    }
+// `objects` is an array: a merge patch replaces it whole, so the edit holds every object.
+// The local scene takes it at once, so a second control's edit carries this value too.
+function apply(params) {
+  const index = state.selected;
+  editScene((scene) => (scene.objects[index] ? { objects: scene.objects.map((o, i) => (i === index ? { ...o, params } : o)) } : null))
+    .catch((e) => set({ status: `parameters: ${e.message}` }));
+}
+
+/** One row: name, input, readout and a reset button; returns its control. */
+function paramRow(list, decl) {
+  const row = document.createElement('label');
+  row.className = 'param';
+  const name = document.createElement('span');
+  name.className = 'param-name';
+  name.textContent = decl.name;
+  name.title = decl.name;   // the whole name, where a narrow panel cuts it short
+  const input = document.createElement('input');
+  input.name = decl.name;
+  if (decl.type === 'float') {
+    input.type = 'range';
+    input.min = decl.min;
+    input.max = decl.max;
+    input.step = (decl.max - decl.min) / 1000 || 'any';
+  } else {
+    input.type = decl.type === 'color' ? 'color' : 'checkbox';
+  }
+  const readout = document.createElement('output');
+  const reset = document.createElement('button');
+  reset.type = 'button';
+  reset.className = 'param-reset';
+  reset.textContent = '↺';
+  reset.title = `reset ${decl.name} to its default`;
+  // The glyph alone is no name for a screen reader: say what it resets.
+  reset.setAttribute('aria-label', reset.title);
+  row.append(name, input, readout, reset);
+  list.append(row);
+  const c = { decl, input, readout };
+  reset.addEventListener('click', (ev) => {
+    ev.preventDefault();   // inside the <label>: must not toggle a check box
+    showValue(c, decl.default);
+    apply({ ...current(), [decl.name]: decl.default });
   });
-  const current = () => ({ ...(state.scene?.objects?.[state.selected]?.params || {}) });
+  input.addEventListener('input', () => {
+    const v = readValue(decl, input);
+    showValue(c, v);
+    apply({ ...current(), [decl.name]: v });
+  });
+  return c;
+}
 
-  const readValue = (decl, input) => {
-    if (decl.type === 'color') return fromHex(input.value);
-    if (decl.type === 'bool') return input.checked;
-    return Number(input.value);
-  };
-  const showValue = (c, v) => {
-    if (v === undefined) return;
-    if (c.decl.type === 'color') c.input.value = toHex(v);
-    else if (c.decl.type === 'bool') c.input.checked = !!v;
-    else c.input.value = v;
-    c.readout.textContent = c.decl.type === 'float' ? Number(v).toPrecision(3) : '';
-  };
-
-  function build({ brdf }) {
-    controls.clear();
-    list.replaceChildren();
-    for (const decl of brdf?.params || []) {
-      const row = document.createElement('label');
-      row.className = 'param';
-      const name = document.createElement('span');
-      name.className = 'param-name';
-      name.textContent = decl.name;
-      name.title = decl.name;   // the whole name, where a narrow panel cuts it short
-      const input = document.createElement('input');
-      input.name = decl.name;
-      if (decl.type === 'float') {
-        input.type = 'range';
-        input.min = decl.min;
-        input.max = decl.max;
-        input.step = (decl.max - decl.min) / 1000 || 'any';
-      } else {
-        input.type = decl.type === 'color' ? 'color' : 'checkbox';
-      }
-      const readout = document.createElement('output');
-      const reset = document.createElement('button');
-      reset.type = 'button';
-      reset.className = 'param-reset';
-      reset.textContent = '↺';
-      reset.title = `reset ${decl.name} to its default`;
-      // The glyph alone is no name for a screen reader: say what it resets.
-      reset.setAttribute('aria-label', reset.title);
-      row.append(name, input, readout, reset);
-      list.append(row);
-      const c = { decl, input, readout };
-      reset.addEventListener('click', (ev) => {
-        ev.preventDefault();   // inside the <label>: must not toggle a check box
-        showValue(c, decl.default);
-        apply({ ...current(), [decl.name]: decl.default });
-      });
-      controls.set(decl.name, c);
-      showValue(c, current()[decl.name] ?? decl.default);
-      input.addEventListener('input', () => {
-        const v = readValue(decl, input);
-        showValue(c, v);
-        apply({ ...current(), [decl.name]: v });
-      });
-    }
-    list.hidden = !controls.size;
-  }
-
-  // Keep the local scene in step so a second control's patch carries this value too.
-  function apply(params) {
-    const index = state.selected;
-    if (!state.scene.objects[index]) return;
-    state.scene.objects[index].params = params;
-    send({ index, params });
-  }
-
-  // ---- presets: named value sets of this BRDF (stored on the server) ----
+/** Presets: named value sets of this BRDF (stored on the server). Returns loadPresets(select). */
+function mountPresets(el, controls) {
   const presetList = el.querySelector('.preset-list');
   const presetBox = el.querySelector('.presets');
   async function loadPresets(select = '') {
@@ -150,8 +135,11 @@ export function mountParams(el) {
       set({ status: `preset: ${e.message}` });
     }
   });
+  return loadPresets;
+}
 
-  on('brdf', (s) => { build(s); loadPresets(); });
+/** The title (which object), and what the server clamped, said beside the sliders. */
+function mountHead(el) {
   const title = el.querySelector('.params-head strong');
   const showTitle = () => {
     const n = state.scene?.objects?.length || 0;
@@ -159,12 +147,6 @@ export function mountParams(el) {
   };
   on('selected', showTitle);
   on('scene', showTitle);
-  // Values the server answered (another control, a reload): update controls not being used.
-  on('scene', ({ scene }) => {
-    const params = scene?.objects?.[state.selected]?.params || {};
-    for (const [name, c] of controls) if (document.activeElement !== c.input) showValue(c, params[name]);
-  });
-
   // What the server clamped (a value carried over from another BRDF by name, outside this
   // one's range): said beside the sliders, which show the value it renders with.
   const notes = el.querySelector('.params-notes');
@@ -172,6 +154,32 @@ export function mountParams(el) {
     const lines = scene?.notes || [];
     notes.textContent = lines.join('\n');
     notes.hidden = !lines.length;
+  });
+}
+
+export function mountParams(el) {
+  const list = el.querySelector('.params-list');
+  const controls = new Map();   // param name -> {decl, input, readout}
+
+  function build({ brdf }) {
+    controls.clear();
+    list.replaceChildren();
+    for (const decl of brdf?.params || []) {
+      const c = paramRow(list, decl);
+      controls.set(decl.name, c);
+      showValue(c, current()[decl.name] ?? decl.default);
+    }
+    list.hidden = !controls.size;
+  }
+
+  const loadPresets = mountPresets(el, controls);
+  on('brdf', (s) => { build(s); loadPresets(); });
+  mountHead(el);
+  // Values of the local scene (this panel's own edits, another control, a reload): update
+  // controls not being used.
+  on('scene', ({ scene }) => {
+    const params = scene?.objects?.[state.selected]?.params || {};
+    for (const [name, c] of controls) if (document.activeElement !== c.input) showValue(c, params[name]);
   });
 
   el.querySelector('.params-reset').addEventListener('click', () => {
