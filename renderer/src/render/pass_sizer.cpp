@@ -68,7 +68,7 @@ uint32_t PassSizer::fit(double targetMs, uint32_t cap) const {
   }
   // Never fewer samples than fit in the pass's fixed part's time: about half of a pass or more
   // goes to samples. Rounded down: the line is measured under noise, and a floor one too high
-  // made the GGX stream's 2-sample passes 3 (18 instead of 22 frames/s).
+  // makes small passes larger than the frame rate allows.
   const uint32_t floor = static_cast<uint32_t>(std::clamp(std::floor(fixed / perSample), 1.0, double(cap)));
   // Out of reach: even that many would take twice the frame (a large image on a CPU device);
   // smaller passes would only spend more of the time on their fixed part.

@@ -18,34 +18,22 @@ namespace brdfa {
 namespace {
 
 constexpr uint32_t kShadeGroup = 8;     // local size of shade/background kernels
-// The preview scratch holds at most this many 2x2 blocks (1.5 MiB per view: a class of 30
-// views at 512^2 held ~100 MiB more with a whole image's 6 MiB each); a larger object's preview
-// goes in several dispatches (a 512^2 sphere's in about 4, ~1 ms more on lavapipe).
+// The preview scratch holds at most this many 2x2 blocks: a scratch for a whole image in every
+// view costs a class of many views much memory; a larger object's preview goes in several
+// dispatches instead, which cost little more time.
 constexpr uint32_t kPreviewScratchBlocks = 16384;
 constexpr VkDeviceSize kPreviewScratchBlockBytes = 6 * 16;  // BRDFA_PREVIEW_STRIDE texels
 constexpr uint32_t kResolveGroup = 16;  // local size of the resolve kernel
 constexpr double kErrorRefreshMs = 200; // rel_error is refreshed at least this often while rendering
-// Splitting a pass into submissions (see renderPass). A view's first submission after its
-// shading changed is a probe of kProbeUnits cost units (pixel-samples): about 0.3 ms for a
-// plain BRDF on lavapipe (2 cores), 60-120 ms for tests/hostile/slow_loop.brdf (300x lambert:
-// the most llvmpipe runs, 65535 loop rounds per invocation). Later submissions are sized
-// from the measured cost, growing at most kGrowth times the largest measured one; the cost
-// falls by at most kCostDecay per submission (see renderPass).
-constexpr double kProbeUnits = 2048;
-constexpr double kGrowth = 4;
-constexpr double kCostDecay = 0.75;
-constexpr double kTail = 1.25;     // a pass's last submission may take this many budgets
-// The passes right after the first one of a restart (2 and 4 samples) are what the next change
-// of a user moving a slider or the camera meets: each is split into at least this many
-// submissions, so that interruptPass() takes effect within a fraction of it. By the pass's
-// cost units, not by time: a unit's time differs several-fold between 1 and 16 samples a
-// pass (the kernel's per-pixel part, run for every dispatched pixel), and sized by a 12 ms
-// target a 2-sample pass went in 17 submissions. The first pass, whose frame the user waits
-// for, and later ones use the device's target alone: every submission waits for the slowest
-// of a CPU device's threads (a 1-sample pass of the GGX sphere took 50 ms in 5 submissions
-// against 35 ms in one).
+// The passes right after the first one of a restart are what the next change of a user moving a
+// slider or the camera meets: each is split into at least SubmissionSizer::kInteractiveSplits
+// submissions, so that interruptPass() takes effect within a fraction of it. By the pass's cost
+// units, not by time: a unit's time differs several-fold between 1 and 16 samples a pass (the
+// kernel's per-pixel part, run for every dispatched pixel), and sized by a time target an
+// interactive pass went in many more submissions. The first pass, whose frame the user waits
+// for, and later ones use the device's target alone: every submission waits for the slowest of
+// a CPU device's threads, and a pass in several submissions takes longer than in one.
 constexpr uint64_t kInteractivePasses = 3;
-constexpr double kInteractiveSplits = 4;
 // A restart of `render` begins with a preview pass (RenderSettings::previewPass).
 bool wantsPreview(const RenderSettings& render) {
   return render.previewPass && uint64_t(render.width) * render.height >= RenderSettings::kPreviewMinPixels;
@@ -133,7 +121,6 @@ size_t RenderViewImpl::partialCount(uint32_t width, uint32_t height) const {
 
 Result<void> RenderViewImpl::resize(uint32_t width, uint32_t height) {
   VkContext& ctx = r_->ctx();
-  VkDevice d = ctx.device();
   // Everything below, counted against the renderer's budget before any of it is allocated.
   const VkDeviceSize pixels = VkDeviceSize(width) * height;
   const uint32_t jitter = pixels <= VkDeviceSize(1024) * 1024 ? kMaxJitter : 1;
@@ -172,7 +159,18 @@ Result<void> RenderViewImpl::resize(uint32_t width, uint32_t height) {
   jitterCount_ = jitter;
   sliceStride_ = stride;
   detailOffset_ = detailOffset;
+  BRDFA_TRY(createTargets(width, height));
+  BRDFA_TRY(createBuffers(width, height, scratchBlocks));
+  width_ = width;
+  height_ = height;
+  return {};
+}
 
+// Drops the old size's framebuffer and texel views (width_ and height_ read 0 until resize
+// completes), and creates the raster targets and framebuffer of a width x height view.
+Result<void> RenderViewImpl::createTargets(uint32_t width, uint32_t height) {
+  VkContext& ctx = r_->ctx();
+  VkDevice d = ctx.device();
   if (framebuffer_) vkDestroyFramebuffer(d, framebuffer_, nullptr);
   framebuffer_ = VK_NULL_HANDLE;
   width_ = height_ = 0;
@@ -208,9 +206,16 @@ Result<void> RenderViewImpl::resize(uint32_t width, uint32_t height) {
   fci.height = height;
   fci.layers = 1;
   BRDFA_VK_TRY(vkCreateFramebuffer(d, &fci, nullptr, &framebuffer_));
+  return {};
+}
 
+// Creates the view's buffers for a width x height view (sizes, slices and planes as resize set
+// them, `scratchBlocks` preview scratch blocks) and their texel views.
+Result<void> RenderViewImpl::createBuffers(uint32_t width, uint32_t height, uint32_t scratchBlocks) {
+  VkContext& ctx = r_->ctx();
+  const VkDeviceSize pixels = VkDeviceSize(width) * height;
   const VkBufferUsageFlags storage = VK_BUFFER_USAGE_STORAGE_BUFFER_BIT;
-  // Four jittered slices (jitterCount_ above) cost 4 x 24 bytes per pixel (25 MB at 512^2);
+  // Four jittered slices (jitterCount_ above) cost 4 x 24 bytes per pixel;
   // above 1024^2 pixels the memory is not worth it and the image is not anti-aliased (its
   // pixels are small anyway).
   slicesReady_ = 0;
@@ -248,8 +253,6 @@ Result<void> RenderViewImpl::resize(uint32_t width, uint32_t height) {
   if (!edgeView) return edgeView.takeError();
   edgeView_ = std::move(edgeView.value());
   previewScratchBlocks_ = scratchBlocks;
-  width_ = width;
-  height_ = height;
   return {};
 }
 
@@ -326,8 +329,8 @@ Result<std::vector<RenderViewImpl::ObjectState>> RenderViewImpl::buildObjects(
     const std::string at = "objects[" + std::to_string(i) + "]";
     ObjectState o;
     o.variant = shadeVariant(*so.brdf, scene.render.sampling, constantEnv);
-    // A program not yet run on a device that compiles it at its first dispatch (lavapipe: 250-
-    // 350 ms for a mis program) previews by the preview kernel, whose own compile is a
+    // A program not yet run on a device that compiles it at its first dispatch (lavapipe; a mis
+    // program's compile is long) previews by the preview kernel, whose own compile is a
     // fraction of that, and compiles in the first pass.
     auto kernels = i < prebuilt.size() && prebuilt[i]
                        ? Result<RendererImpl::ShadeKernels>(*prebuilt[i])
@@ -440,32 +443,52 @@ Result<void> RenderViewImpl::setScene(const Scene& scene) {
   }
   if (resized || previousEnv != env_) writeViewDescriptors();
 
-  bool sameShading = hasScene_ && !resized && sameLighting(scene_, scene) && objects.size() == objects_.size();
-  for (size_t i = 0; sameShading && i < objects.size(); ++i) {
-    sameShading = objects[i].kernel->programHash == objects_[i].kernel->programHash &&
-                  objects[i].params.size() == objects_[i].params.size() &&
-                  std::memcmp(objects[i].params.mapped(), objects_[i].params.mapped(), objects[i].params.size()) == 0 &&
-                  scene.objects[i].textures == scene_.objects[i].textures;
+  const SceneChange change = compareScene(scene, objects, resized);
+  adoptScene(scene, std::move(objects), change);
+  describeScene(dropsBefore);
+  updateDone();
+  return {};
+}
+
+// How `scene`, with `objects` built for it, differs from the scene the view holds (any scene
+// differs in everything from none). `resized`: the new scene's size differs.
+RenderViewImpl::SceneChange RenderViewImpl::compareScene(const Scene& scene, const std::vector<ObjectState>& objects,
+                                                         bool resized) const {
+  SceneChange c;
+  c.sameShading = hasScene_ && !resized && sameLighting(scene_, scene) && objects.size() == objects_.size();
+  for (size_t i = 0; c.sameShading && i < objects.size(); ++i) {
+    c.sameShading = objects[i].kernel->programHash == objects_[i].kernel->programHash &&
+                    objects[i].params.size() == objects_[i].params.size() &&
+                    std::memcmp(objects[i].params.mapped(), objects_[i].params.mapped(), objects[i].params.size()) == 0 &&
+                    scene.objects[i].textures == scene_.objects[i].textures;
   }
   // The same pipelines (parameters, textures or lighting changed): no driver compile comes with
   // the next dispatch.
-  bool samePrograms = hasScene_ && objects.size() == objects_.size();
-  for (size_t i = 0; samePrograms && i < objects.size(); ++i)
-    samePrograms = objects[i].kernel->programHash == objects_[i].kernel->programHash;
-  const bool geometryChanged = resized || !hasScene_ || !sameGeometry(scene_, scene);
-  const bool lightingChanged = !hasScene_ || !sameLighting(scene_, scene);
-  const bool restart = geometryChanged || !sameShading;
-  const bool displayChanged = !hasScene_ || scene.render.exposure != scene_.render.exposure ||
-                              scene.render.toneMap != scene_.render.toneMap ||
-                              scene.render.samplesPerFrame != scene_.render.samplesPerFrame ||
-                              scene.render.maxSamples != scene_.render.maxSamples ||
-                              scene.render.targetError != scene_.render.targetError;
+  c.samePrograms = hasScene_ && objects.size() == objects_.size();
+  for (size_t i = 0; c.samePrograms && i < objects.size(); ++i)
+    c.samePrograms = objects[i].kernel->programHash == objects_[i].kernel->programHash;
+  c.geometryChanged = resized || !hasScene_ || !sameGeometry(scene_, scene);
+  c.lightingChanged = !hasScene_ || !sameLighting(scene_, scene);
+  c.restart = c.geometryChanged || !c.sameShading;
+  c.displayChanged = !hasScene_ || scene.render.exposure != scene_.render.exposure ||
+                     scene.render.toneMap != scene_.render.toneMap ||
+                     scene.render.samplesPerFrame != scene_.render.samplesPerFrame ||
+                     scene.render.maxSamples != scene_.render.maxSamples ||
+                     scene.render.targetError != scene_.render.targetError;
+  return c;
+}
 
+// Makes `scene` with its `objects` the view's: their screen bounds and coverage, what must be
+// redrawn (G-buffer slices, edge list, clears), what the submission sizer relearns, and on a
+// restart the pass state and statistics started again (sceneVersion goes on).
+void RenderViewImpl::adoptScene(const Scene& scene, std::vector<ObjectState> objects, const SceneChange& change) {
+  const auto width = static_cast<uint32_t>(scene.render.width);
+  const auto height = static_cast<uint32_t>(scene.render.height);
   const glm::mat4 viewProj = cameraFrame(scene.camera, width, height).viewProj;
   for (size_t i = 0; i < objects.size(); ++i)
     objects[i].pixels = screenBounds(viewProj, modelMatrix(scene.objects[i]), objects[i].mesh->boundsMin,
                                      objects[i].mesh->boundsMax, width, height);
-  if (geometryChanged)
+  if (change.geometryChanged)
     coverageKnown_ = false;
   else  // the coverage depends on the geometry only
     for (size_t i = 0; i < objects.size(); ++i) objects[i].cover = std::move(objects_[i].cover);
@@ -473,7 +496,7 @@ Result<void> RenderViewImpl::setScene(const Scene& scene) {
   objects_ = std::move(objects);
   scene_ = scene;
   hasScene_ = true;
-  if (geometryChanged) {
+  if (change.geometryChanged) {
     slicesReady_ = 0;
     edgeListKnown_ = false;
   }
@@ -482,23 +505,14 @@ Result<void> RenderViewImpl::setScene(const Scene& scene) {
   // A new camera, geometry or environment changes coverage or background: clear everything and
   // redraw the background. A new BRDF or parameters keep both: the first pass overwrites the
   // object pixels instead (see the shade kernel), which is cheaper.
-  if (geometryChanged || lightingChanged) clearPending_ = true;
+  if (change.geometryChanged || change.lightingChanged) clearPending_ = true;
   // What a submission costs is relearned when what the shading runs changed (a parameter can
   // be a loop count), by a probe; a camera move keeps it. With the same pipelines the probe
   // carries no driver compile (no warm-up), and the largest submission so far still bounds the
   // growth after it: a slider's change costs a probe and the pass, not a ramp of submissions
-  // (which, each with its wake-ups, cost a loaded CPU ~10 ms a frame).
-  if (!sameShading) {
-    // The same pipelines with other parameters: the old cost is a fair guess, kept to let the
-    // estimate fall to it after the probe (see renderPass).
-    priorMsPerUnit_ = samePrograms ? msPerUnit_ : 0;
-    msPerUnit_ = 0;
-    if (!samePrograms) {
-      maxUnits_ = 0;
-      warmUp_ = true;
-    }
-  }
-  if (restart) {
+  // (each with its wake-ups, which cost a loaded CPU much of a frame).
+  if (!change.sameShading) submissionSizer_.shadingChanged(change.samePrograms);
+  if (change.restart) {
     partial_.reset();  // its samples are of the old image
     sizer_.reset();    // the costs of what is drawn now are unmeasured
     firstSamplePending_ = false;
@@ -510,7 +524,12 @@ Result<void> RenderViewImpl::setScene(const Scene& scene) {
     stats_.sceneVersion = version;
     sinceErrorMs_ = 0;
   }
-  if (restart || displayChanged) ++stats_.sceneVersion;
+  if (change.restart || change.displayChanged) ++stats_.sceneVersion;
+}
+
+// The statistics that describe the scene rather than its passes: geometry and program sizes,
+// estimators and warnings, and a warning where optional caches were dropped since `dropsBefore`.
+void RenderViewImpl::describeScene(uint64_t dropsBefore) {
   stats_.vertices = stats_.triangles = stats_.programBytes = 0;
   stats_.estimator.clear();
   stats_.warnings.clear();
@@ -539,8 +558,6 @@ Result<void> RenderViewImpl::setScene(const Scene& scene) {
     programs.push_back(o.kernel->programHash);
     stats_.programBytes += o.kernel->spirvBytes;
   }
-  updateDone();
-  return {};
 }
 
 void RenderViewImpl::updateDone() {
@@ -662,8 +679,8 @@ void RenderViewImpl::recordPending(VkCommandBuffer cb, uint32_t slice, bool resu
     memoryBarrier(cb, VK_PIPELINE_STAGE_TRANSFER_BIT, VK_ACCESS_TRANSFER_WRITE_BIT,
                   VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_ACCESS_SHADER_READ_BIT | VK_ACCESS_SHADER_WRITE_BIT);
   // Deterministic outside the objects' bounds: written once per restart, not every pass. A
-  // preview writes it at its own resolution, one lookup per 2x2 block (a camera dragged on
-  // lavapipe: 10 -> ~3 ms of a 40 ms restart), and leaves the full one to the next pass.
+  // preview writes it at its own resolution, one lookup per 2x2 block (a good part of a dragged
+  // camera's restart on lavapipe), and leaves the full one to the next pass.
   const bool background = (clearPending_ || (blockBackground_ && !preview)) && scene_.environment.visible;
   const bool blocks = clearPending_ && preview;
   blockBackground_ = preview ? blockBackground_ || blocks : false;
@@ -776,7 +793,6 @@ Result<FrameStats> RenderViewImpl::renderPass(double frameTargetMs) {
 
 Result<FrameStats> RenderViewImpl::passLocked(bool interruptible, double frameTargetMs) {
   stats_.passInProgress = false;
-  const uint64_t maxSamples = static_cast<uint64_t>(scene_.render.maxSamples);
   updateDone();
   if (stats_.done()) {
     // max_samples lowered below an interrupted pass: its samples stay where they were taken
@@ -784,9 +800,43 @@ Result<FrameStats> RenderViewImpl::passLocked(bool interruptible, double frameTa
     partial_.reset();
     return stats_;
   }
-  const auto t0 = std::chrono::steady_clock::now();
-  const std::optional<PartialPass> resumed = std::move(partial_);
+  PassPlan plan = planPass(interruptible, frameTargetMs);
+  Sweep sweep = startSweep(plan);
+  auto complete = runSweep(plan, sweep);
+  if (!complete) return complete.takeError();
+  if (!*complete) return stats_;  // left partway: partial_ holds where it stands
+  return finishPass(plan, sweep);
+}
+
+double RenderViewImpl::groupUnits(const ObjectState& o, size_t group, uint32_t n, bool preview) {
+  // One unit per sample of a covered pixel: an invocation off the object costs next to nothing
+  // against a loop-heavy BRDF's sample, the case the split is for. One unit per workgroup
+  // keeps empty tiles from being free.
+  const double covered = o.cover.empty() || preview ? kShadeGroup * kShadeGroup : o.cover[group];
+  return covered * n + 1.0;
+}
+
+uint32_t RenderViewImpl::gridX(const ObjectState& o, uint32_t scale) {
+  return groups((o.pixels.width + scale - 1) / scale, kShadeGroup);
+}
+
+uint32_t RenderViewImpl::gridY(const ObjectState& o, uint32_t scale) {
+  return groups((o.pixels.height + scale - 1) / scale, kShadeGroup);
+}
+
+// Decides what the pass does before its first submission: resumes an interrupted pass with its
+// own samples, slice and sweep size, or picks a new pass's kind (preview, first sample or a
+// pass of the programs), sample count, G-buffer slice and samples per sweep. Takes over
+// partial_ and clears a provisional first sample's count; lists the edge pixels between passes.
+RenderViewImpl::PassPlan RenderViewImpl::planPass(bool interruptible, double frameTargetMs) {
+  PassPlan p;
+  p.interruptible = interruptible;
+  p.frameTargetMs = frameTargetMs;
+  p.t0 = std::chrono::steady_clock::now();
+  p.resumed = std::move(partial_);
   partial_.reset();
+  const std::optional<PartialPass>& resumed = p.resumed;
+  const uint64_t maxSamples = static_cast<uint64_t>(scene_.render.maxSamples);
   // The first pass by the programs replaces a first sample (RenderSettings::firstSampleKernel):
   // it overwrites (passes is still 0), and the count starts again from it.
   if (stats_.provisional) {
@@ -801,357 +851,371 @@ Result<FrameStats> RenderViewImpl::passLocked(bool interruptible, double frameTa
   // A preview (RenderSettings::previewPass) shades one sample at one pixel of each 2x2
   // block, over workgroups of 16x16 pixels: `scale` 2; by the program, or by the preview
   // kernel where the program has not run yet (buildObjects).
-  const bool preview = previewPending_;
+  p.preview = previewPending_;
   // A first sample (RenderSettings::firstSampleKernel): one sample per pixel, by the preview
   // kernel where a program has not run yet.
-  const bool firstSample = firstSamplePending_ && !resumed;
-  const uint32_t scale = preview ? 2 : 1;
-  uint32_t count = preview || firstSample ? 1
-                   : resumed ? resumed->count
-                             : static_cast<uint32_t>(std::min<uint64_t>(
-                                   {static_cast<uint64_t>(scene_.render.samplesPerFrame), ramp, maxSamples - stats_.spp}));
-  if (frameTargetMs > 0 && !preview && !firstSample && !resumed) count = sizer_.fit(frameTargetMs, count);
-  const uint32_t slice = resumed ? resumed->slice : sliceForPass(stats_.passes);
-  const bool firstPass = stats_.passes == 0;
+  p.firstSample = firstSamplePending_ && !resumed;
+  p.scale = p.preview ? 2 : 1;
+  p.count = p.preview || p.firstSample ? 1
+            : resumed ? resumed->count
+                      : static_cast<uint32_t>(std::min<uint64_t>(
+                            {static_cast<uint64_t>(scene_.render.samplesPerFrame), ramp, maxSamples - stats_.spp}));
+  if (frameTargetMs > 0 && !p.preview && !p.firstSample && !resumed) p.count = sizer_.fit(frameTargetMs, p.count);
+  p.slice = resumed ? resumed->slice : sliceForPass(stats_.passes);
+  p.firstPass = stats_.passes == 0;
   // Refresh the error estimate in the last submission when it is due (and a second half exists).
-  const bool refreshError = resumed ? resumed->refreshError
-                                    : !preview && stats_.passes >= 1 &&
-                                          (sinceErrorMs_ >= kErrorRefreshMs || stats_.spp + count >= maxSamples);
+  p.refreshError = resumed ? resumed->refreshError
+                           : !p.preview && stats_.passes >= 1 &&
+                                 (sinceErrorMs_ >= kErrorRefreshMs || stats_.spp + p.count >= maxSamples);
   // A watched pass that outlasts its frame (even one sample: a costly BRDF, or mis at 512^2 on
   // a CPU device) returns at a submission boundary once the frame's time is spent, so the
   // stream shows a frame partway and this goes on at the next call. Not the first pass after a
   // restart: it overwrites, and the pixels it has not reached still hold the previous image.
-  const bool sliced = frameTargetMs > 0 && interruptible && !preview && stats_.passes >= 1;
+  p.sliced = frameTargetMs > 0 && interruptible && !p.preview && stats_.passes >= 1;
 
   // Objects whose preview comes from the preview kernel (buildObjects).
-  std::vector<bool> byPreviewKernel(objects_.size(), false);
-  bool previewKernelPass = false;
-  for (size_t i = 0; (preview || firstSample) && i < objects_.size(); ++i)
-    previewKernelPass |= byPreviewKernel[i] = objects_[i].previewKernel && !objects_[i].kernel->dispatched;
+  p.byPreviewKernel.assign(objects_.size(), false);
+  for (size_t i = 0; (p.preview || p.firstSample) && i < objects_.size(); ++i)
+    p.previewKernelPass |= p.byPreviewKernel[i] = objects_[i].previewKernel && !objects_[i].kernel->dispatched;
 
-  // Cost in units: one per sample of a covered pixel. An invocation off the object costs next
-  // to nothing against a loop-heavy BRDF's sample, the case the split is for; one unit per
-  // workgroup keeps empty tiles from being free.
-  const double groupPixels = kShadeGroup * kShadeGroup;
-  auto groupUnits = [&](const ObjectState& o, size_t group, uint32_t n) {
-    const double covered = o.cover.empty() || preview ? groupPixels : o.cover[group];  // cover: per 8x8 pixels
-    return covered * n + 1.0;
-  };
-  // An object's dispatch grid: workgroups over its bounds (over its 2x2 blocks in a preview).
-  auto gridX = [&](const ObjectState& o) { return groups((o.pixels.width + scale - 1) / scale, kShadeGroup); };
-  auto gridY = [&](const ObjectState& o) { return groups((o.pixels.height + scale - 1) / scale, kShadeGroup); };
-  double targetMs = r_->ctx().submissionTargetMs(cmd_.fence());
-  uint32_t chunk = count;  // samples per sweep
-  if (resumed)  // a sweep in progress goes on with the same samples
-    chunk = resumed->chunk;
-  else if (targetMs > 0 && msPerUnit_ > 0)
-    chunk = static_cast<uint32_t>(std::clamp(std::floor(targetMs / msPerUnit_ / groupPixels), 1.0, double(count)));
-  std::vector<size_t> visible;  // objects on screen
-  double passUnits = 0;         // to let the last submission take up to kTail budgets
+  p.targetMs = r_->ctx().submissionTargetMs(cmd_.fence());
+  // Samples per sweep; a sweep in progress goes on with the same samples.
+  p.chunk = resumed ? resumed->chunk : submissionSizer_.samplesPerSweep(p.targetMs, p.count, kShadeGroup * kShadeGroup);
   for (size_t i = 0; i < objects_.size(); ++i) {
     const ObjectState& o = objects_[i];
     if (o.pixels.width == 0 || o.pixels.height == 0) continue;
-    visible.push_back(i);
-    const size_t n = size_t(gridX(o)) * gridY(o);
-    for (size_t g = 0; g < n; ++g) passUnits += groupUnits(o, g, count);
+    p.visible.push_back(i);
+    const size_t n = size_t(gridX(o, p.scale)) * gridY(o, p.scale);
+    for (size_t g = 0; g < n; ++g) p.passUnits += groupUnits(o, g, p.count, p.preview);
   }
+  return p;
+}
 
-  ComputePush push = basePush();
+// The sweep at the pass's start: at the beginning, or where a resumed pass stood, with the
+// shade kernels' push constants for the pass's slice.
+RenderViewImpl::Sweep RenderViewImpl::startSweep(const PassPlan& plan) const {
+  Sweep s;
+  s.push = basePush();
   // V is taken along the view ray through the sub-pixel position this slice was rasterized at.
-  const glm::vec2 jitter = jitterOffset(slice, jitterCount_);
-  push.tone[2] = jitter.x;
-  push.tone[3] = jitter.y;
-  const VkPipelineLayout layout = r_->computeLayout();
-  // Where the sweep stands: samples done, visible object, workgroup row and column in its bounds.
-  uint32_t done = visible.empty() ? count : 0, row = 0, col = 0;
-  size_t obj = 0;
-  double passDone = 0;  // units shaded so far
-  if (resumed) {  // the same scene geometry (a restart drops the partial pass): same objects
-    done = resumed->done, row = resumed->row, col = resumed->col, obj = resumed->obj;
-    passDone = resumed->passDone;
+  const glm::vec2 jitter = jitterOffset(plan.slice, jitterCount_);
+  s.push.tone[2] = jitter.x;
+  s.push.tone[3] = jitter.y;
+  s.done = plan.visible.empty() ? plan.count : 0;
+  if (const std::optional<PartialPass>& resumed = plan.resumed) {
+    // The same scene geometry (a restart drops the partial pass): same objects.
+    s.done = resumed->done, s.row = resumed->row, s.col = resumed->col, s.obj = resumed->obj;
+    s.passDone = resumed->passDone;
   }
   // With RendererOptions::profilePasses each phase ends its submission, timed into `breakdown`.
-  const bool profile = r_->profilePasses();
-  PassBreakdown breakdown;
-  VkCommandBuffer cb = VK_NULL_HANDLE;
-  auto endPhase = [&](double& phaseMs) -> Result<void> {
-    if (!profile) return {};
-    memoryBarrier(cb, VK_PIPELINE_STAGE_ALL_COMMANDS_BIT, VK_ACCESS_MEMORY_WRITE_BIT, VK_PIPELINE_STAGE_ALL_COMMANDS_BIT,
-                  VK_ACCESS_MEMORY_READ_BIT | VK_ACCESS_MEMORY_WRITE_BIT);
-    double ms = 0;
-    BRDFA_TRY(cmd_.submitAndWait(&ms, /*viewPass=*/true));
-    phaseMs += ms;
-    auto begun = cmd_.begin();
-    if (!begun) return begun.takeError();
-    cb = *begun;  // each phase's recording binds what it uses
-    return {};
-  };
-  uint64_t submissions = 0;
-  double maxSubmissionMs = 0;
-  std::vector<const ShadeKernel*> bound;  // kernels the submission being recorded dispatches
-  bool previewStagesCompiled = false;     // the preview kernel's stages have run in this pass
+  s.profile = r_->profilePasses();
+  return s;
+}
+
+Result<void> RenderViewImpl::endPhase(Sweep& s, double& phaseMs) {
+  if (!s.profile) return {};
+  memoryBarrier(s.cb, VK_PIPELINE_STAGE_ALL_COMMANDS_BIT, VK_ACCESS_MEMORY_WRITE_BIT,
+                VK_PIPELINE_STAGE_ALL_COMMANDS_BIT, VK_ACCESS_MEMORY_READ_BIT | VK_ACCESS_MEMORY_WRITE_BIT);
+  double ms = 0;
+  BRDFA_TRY(cmd_.submitAndWait(&ms, /*viewPass=*/true));
+  phaseMs += ms;
+  auto begun = cmd_.begin();
+  if (!begun) return begun.takeError();
+  s.cb = *begun;  // each phase's recording binds what it uses
+  return {};
+}
+
+// Runs the pass's submissions to its end, or until it is interrupted or its frame's time is
+// spent: true when complete, false when left partway (partial_ then holds where it stands and
+// stats_ its time). Each submission is sized by submissionSizer_, which learns from its time.
+Result<bool> RenderViewImpl::runSweep(const PassPlan& plan, Sweep& s) {
   do {
     // Slice 0 recorded by an earlier submission (all waited for) is on the host's side now.
-    if (targetMs > 0 && !coverageKnown_ && (slicesReady_ & 1u)) measureCoverage();
+    if (plan.targetMs > 0 && !coverageKnown_ && (slicesReady_ & 1u)) measureCoverage();
     // A submission that rasterizes slice 0 shades nothing where the host will read the
     // coverage from it: shading before that would be sized by the bounds' area.
-    const bool rasterOnly = targetMs > 0 && !coverageKnown_ && gbuffer_.mapped() && (slicesReady_ & 1u) == 0;
+    const bool rasterOnly = plan.targetMs > 0 && !coverageKnown_ && gbuffer_.mapped() && (slicesReady_ & 1u) == 0;
     auto begun = cmd_.begin();
     if (!begun) return begun.takeError();
-    cb = *begun;
-    if (submissions == 0) {
-      recordPending(cb, slice, resumed.has_value(), preview);
-      BRDFA_TRY(endPhase(breakdown.setupMs));
+    s.cb = *begun;
+    if (s.submissions == 0) {
+      recordPending(s.cb, plan.slice, plan.resumed.has_value(), plan.preview);
+      BRDFA_TRY(endPhase(s, s.breakdown.setupMs));
     } else  // the accumulators are read-modify-written; earlier submissions' writes come first
-      memoryBarrier(cb, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_ACCESS_SHADER_WRITE_BIT,
+      memoryBarrier(s.cb, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_ACCESS_SHADER_WRITE_BIT,
                     VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_ACCESS_SHADER_READ_BIT | VK_ACCESS_SHADER_WRITE_BIT);
-    vkCmdBindDescriptorSets(cb, VK_PIPELINE_BIND_POINT_COMPUTE, layout, 0, 1, &viewSets_[slice], 0, nullptr);
-    // The units this submission may take: no measurement yet, a probe; then what the target
-    // allows at the measured cost, growing at most kGrowth times the largest measured
-    // submission (a cost measured where the objects are thin can be too low).
-    const bool interactive = targetMs > 0 && stats_.passes >= 1 && stats_.passes < kInteractivePasses;
-    const double sized = std::min({targetMs <= 0     ? INFINITY
-                                   : msPerUnit_ <= 0 ? kProbeUnits
-                                                     : std::min(targetMs / msPerUnit_, kGrowth * maxUnits_),
-                                   interactive ? passUnits / kInteractiveSplits : INFINITY,
-                                   // two or more submissions per frame, to return near its target
-                                   sliced && msPerUnit_ > 0 ? 0.5 * frameTargetMs / msPerUnit_ : INFINITY});
-    // No small last submission: its fixed costs would come on top for little.
-    const double budget = msPerUnit_ > 0 && passUnits - passDone <= kTail * sized ? INFINITY : sized;
+    vkCmdBindDescriptorSets(s.cb, VK_PIPELINE_BIND_POINT_COMPUTE, r_->computeLayout(), 0, 1, &viewSets_[plan.slice],
+                            0, nullptr);
+    SubmissionSizer::Request request;
+    request.targetMs = plan.targetMs;
+    request.passUnits = plan.passUnits;
+    request.passDone = s.passDone;
+    request.interactive = stats_.passes >= 1 && stats_.passes < kInteractivePasses;
+    request.frameMs = plan.sliced ? plan.frameTargetMs : 0;  // two or more submissions per frame
+    const SubmissionSizer::Budget budget = submissionSizer_.budget(request);
     double units = 0;
-    while (done < count && !rasterOnly) {
-      const size_t i = visible[obj];
-      const ObjectState& o = objects_[i];
-      const uint32_t gx = gridX(o), gy = gridY(o);
-      const uint32_t n = std::min(chunk, count - done);
-      // A preview-kernel dispatch hands over through the scratch, one block per invocation
-      // (a whole row of the image's blocks always fits: see resize).
-      const uint32_t maxRows = byPreviewKernel[i] ? std::max(1u, previewScratchBlocks_ / (gx * kShadeGroup * kShadeGroup))
-                                                  : UINT32_MAX;
-      // Whole rows of workgroups while they fit, else part of one row (at least one workgroup
-      // per submission).
-      uint32_t cols = 0, rows = 0;
-      double taken = 0;
-      if (col == 0) {
-        for (uint32_t r = row; r < gy && rows < maxRows; ++r, ++rows) {
-          double rowUnits = 0;
-          for (uint32_t c = 0; c < gx; ++c) rowUnits += groupUnits(o, size_t(r) * gx + c, n);
-          if (units + taken + rowUnits > budget) break;
-          taken += rowUnits;
-        }
-        if (rows > 0) cols = gx;
-      }
-      if (rows == 0) {
-        // A part of a row only where one row alone passes the budget: a tile's left and right
-        // halves differ more than a row's (see the dispatches below).
-        if (col == 0 && units > 0) break;
-        rows = 1;
-        for (uint32_t c = col; c < gx; ++c, ++cols) {
-          const double g = groupUnits(o, size_t(row) * gx + c, n);
-          if (units + taken + g > budget && (cols > 0 || units > 0)) break;
-          taken += g;
-        }
-        if (cols == 0) break;  // this submission is full
-      }
-      push.target[0] = static_cast<uint32_t>(i + 1);
-      // First pass: overwrite, not add (per pixel); a preview (bit 1) overwrites too.
-      push.target[3] = preview ? 2u : firstPass && done == 0 ? 1u : 0u;
-      push.frame[2] = static_cast<uint32_t>(stats_.spp + done);  // the sequence continues across passes
-      push.frame[3] = n;
-      const ShadeKernel& kernel = byPreviewKernel[i] ? *o.previewKernel : *o.kernel;
-      bound.push_back(&kernel);
-      vkCmdBindDescriptorSets(cb, VK_PIPELINE_BIND_POINT_COMPUTE, layout, 1, 1, &o.set, 0, nullptr);
-      // One dispatch per band, its rows permuted: llvmpipe hands each thread one contiguous
-      // run of a dispatch's workgroups (lp_cs_tpool: two halves on two cores), and a band's
-      // top and bottom halves can differ in cost several times over (near a sphere's pole).
-      // Workgroup row y shades the band's row (y * step) mod rows, step ~ 0.618 rows and
-      // coprime to it, so every contiguous run of workgroups takes rows spread over the whole
-      // band and the threads finish together. Measured (GGX, 16 samples/pass, 2 views): rows
-      // grouped into dispatches of ~1 ms instead cost a third more per pass on a busy 2-core
-      // VM, every dispatch waiting for both threads.
-      uint32_t step = 1;
-      if (rows > 2) {
-        step = std::max<uint32_t>(1, static_cast<uint32_t>(std::lround(rows * 0.6180339887)));
-        while (std::gcd(step, rows) != 1) ++step;
-      }
-      const uint32_t permutation = rows | (step << 16);  // rows and step are below 4096 / 8
-      std::memcpy(&push.cameraPos[3], &permutation, sizeof permutation);
-      // Dispatch origin; images are at most 4096 wide.
-      push.target[2] = (o.pixels.x + col * kShadeGroup * scale) | ((o.pixels.y + row * kShadeGroup * scale) << 16);
-      vkCmdPushConstants(cb, layout, VK_SHADER_STAGE_COMPUTE_BIT, 0, sizeof(push), &push);
-      if (byPreviewKernel[i]) {
-        // The preview kernel's three stages over one grid (kernels/preview.comp.glsl), each
-        // reading what the one before wrote to the scratch; the next dispatch writes it again.
-        const VkPipeline stages[3] = {r_->previewSetupPipeline(env_->constant), kernel.kernel->pipeline(),
-                                      r_->previewScatterPipeline()};
-        for (int k = 0; k < 3; ++k) {
-          vkCmdBindPipeline(cb, VK_PIPELINE_BIND_POINT_COMPUTE, stages[k]);
-          vkCmdDispatch(cb, cols, rows, 1);
-          memoryBarrier(cb, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_ACCESS_SHADER_WRITE_BIT,
-                        VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_ACCESS_SHADER_READ_BIT | VK_ACCESS_SHADER_WRITE_BIT);
-          // The pass's first dispatch of each stage may carry its driver compile (the JIT, at
-          // the first dispatch on lavapipe): each in a submission of its own, so the budget of
-          // a submission meets one compile at a time, as in a program's first pass.
-          if (previewStagesCompiled || k == 2) continue;
-          double stageMs = 0;
-          BRDFA_TRY(cmd_.submitAndWait(&stageMs, /*viewPass=*/true));
-          ++submissions;
-          maxSubmissionMs = std::max(maxSubmissionMs, stageMs);
-          auto again = cmd_.begin();
-          if (!again) return again.takeError();
-          cb = *again;
-          vkCmdBindDescriptorSets(cb, VK_PIPELINE_BIND_POINT_COMPUTE, layout, 0, 1, &viewSets_[slice], 0, nullptr);
-          vkCmdBindDescriptorSets(cb, VK_PIPELINE_BIND_POINT_COMPUTE, layout, 1, 1, &o.set, 0, nullptr);
-          vkCmdPushConstants(cb, layout, VK_SHADER_STAGE_COMPUTE_BIT, 0, sizeof(push), &push);
-        }
-        previewStagesCompiled = true;
-      } else {
-        vkCmdBindPipeline(cb, VK_PIPELINE_BIND_POINT_COMPUTE, kernel.kernel->pipeline());
-        vkCmdDispatch(cb, cols, rows, 1);
-      }
-      units += taken;
-      // Objects cover disjoint pixels, so their dispatches need no barrier between them; the
-      // next sweep adds to the same pixels and does.
-      col += cols;
-      if (col == gx) {
-        col = 0;
-        row += rows;
-      }
-      if (row < gy) continue;
-      row = 0;
-      if (++obj < visible.size()) continue;
-      obj = 0;
-      done += n;
-      if (done < count)
-        memoryBarrier(cb, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_ACCESS_SHADER_WRITE_BIT,
-                      VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_ACCESS_SHADER_READ_BIT | VK_ACCESS_SHADER_WRITE_BIT);
+    if (!rasterOnly) {
+      auto recorded = recordShading(plan, s, budget.units);
+      if (!recorded) return recorded.takeError();
+      units = *recorded;
     }
-    BRDFA_TRY(endPhase(breakdown.shadeMs));
-    if (done >= count) {
-      // Inside the objects' bounds a pixel may be background in this slice and covered in
-      // another (an edge): its background samples are taken with the pass, so the pixel is the
-      // average over its sub-pixel positions. With one slice nothing changes from pass to pass.
-      // A preview leaves them to the first pass: it shows the background the restart wrote.
-      if (jitterCount_ > 1 && !preview) recordBackground(cb, coverRect_, slice, count, firstPass);
-      BRDFA_TRY(endPhase(breakdown.edgeMs));
-      if (refreshError && !r_->hostResolve()) {
-        memoryBarrier(cb, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_ACCESS_SHADER_WRITE_BIT,
-                      VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_ACCESS_SHADER_READ_BIT);
-        recordResolve(cb, false);
-        BRDFA_TRY(endPhase(breakdown.resolveMs));
-      }
-    }
-    memoryBarrier(cb, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_ACCESS_SHADER_WRITE_BIT,
-                  VK_PIPELINE_STAGE_HOST_BIT, VK_ACCESS_HOST_READ_BIT);
+    BRDFA_TRY(endPhase(s, s.breakdown.shadeMs));
+    if (s.done >= plan.count) BRDFA_TRY(recordPassEnd(plan, s));
+    memoryBarrier(s.cb, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_ACCESS_SHADER_WRITE_BIT, VK_PIPELINE_STAGE_HOST_BIT,
+                  VK_ACCESS_HOST_READ_BIT);
     double ms = 0;
     BRDFA_TRY(cmd_.submitAndWait(&ms, /*viewPass=*/true));
-    for (const ShadeKernel* k : bound) k->dispatched = true;
-    bound.clear();
+    for (const ShadeKernel* k : s.bound) k->dispatched = true;
+    s.bound.clear();
     clearPending_ = false;
-    ++submissions;
-    maxSubmissionMs = std::max(maxSubmissionMs, ms);
-    // The cost is learned from submissions that filled most of their budget: a pass's small
-    // remainder would read as expensive (fixed costs: G-buffer raster, background, resolve) and
-    // shrink the next pass's first submission for nothing. A slow one always counts. The cost
-    // rises at once but falls by at most kCostDecay per submission: where an object is thin
-    // (the bottom of a sphere, before the next pass starts at its top) its covered pixels are
-    // few and the measure is noisy, and a low reading would make the next submission too long.
-    passDone += units;
-    // The first submission of a shading can carry the driver's compile of its pipeline
-    // (lavapipe JITs at the first dispatch, ~0.5 s): it is a warm-up, and a second probe
-    // measures. Learned from it, the cost read ~1000x too high, and the view went on in
-    // one-workgroup submissions, each waiting its turn behind every other view's (one of 30
-    // sessions streaming stalled for a minute).
-    // A probe's few units carry a whole submission's fixed costs (wake-ups, fence): for a
-    // plain BRDF it reads ~20x too high, and falling from there by kCostDecay took a slider's
-    // pass a dozen submissions. After a change of parameters only, the estimate may fall at
-    // once as far as the cost before the change.
-    if (units > 0 && warmUp_) {
-      warmUp_ = false;
-    } else if (units > 0 && (msPerUnit_ <= 0 || units >= 0.5 * sized || ms > targetMs)) {
-      const double floor = priorMsPerUnit_ > 0 ? std::min(kCostDecay * msPerUnit_, priorMsPerUnit_)
-                                               : kCostDecay * msPerUnit_;
-      msPerUnit_ = std::max(ms / units, floor);
-    }
-    maxUnits_ = std::max(maxUnits_, units);
-    // A preview or first sample is not interrupted: it is short, and under changes coming
-    // faster than it (a camera dragged), interrupting it would leave nothing to show at all.
-    const bool interrupted =
-        done < count && interruptible && !preview && !firstSample && interruptRequested_.exchange(false);
-    // At the frame target: the next submission (about as long as this one) would pass it.
-    const bool frameSpent = done < count && sliced && msSince(t0) + ms > frameTargetMs;
-    if (interrupted || frameSpent) {
-      // Keep the place; spp counts the pass once complete.
-      const double segmentMs = msSince(t0);
-      partial_ = PartialPass{count, slice, chunk, done, row, col, obj, passDone,
-                             (resumed ? resumed->ms : 0.0) + segmentMs, refreshError};
-      stats_.elapsedMs += segmentMs;
-      sinceErrorMs_ += segmentMs;
-      stats_.passInProgress = !interrupted;  // interrupted: a scene change waits, nothing to show
-      return stats_;
-    }
-  } while (done < count);
+    ++s.submissions;
+    s.maxSubmissionMs = std::max(s.maxSubmissionMs, ms);
+    s.passDone += units;
+    submissionSizer_.record(units, ms, budget);
+    if (leavePartway(plan, s, ms)) return false;
+  } while (s.done < plan.count);
+  return true;
+}
 
-  priorMsPerUnit_ = 0;  // one pass to settle on the new cost
-  const double segmentMs = msSince(t0);  // this call's part of the pass
-  const double passMs = segmentMs + (resumed ? resumed->ms : 0.0);
-  if (preview) {  // counts in no statistic but the render time
-    previewPending_ = false;
-    if (previewKernelPass) {
-      // What was learned is the preview kernel's cost: the scene's programs are still to be
-      // compiled (their first submission a warm-up) and measured, as after a change of program.
-      msPerUnit_ = priorMsPerUnit_ = maxUnits_ = 0;
-      warmUp_ = true;
-      for (ObjectState& o : objects_) o.previewKernel.reset();
+// Records the shading of one submission: tiles of the objects' workgroup grids, from where the
+// sweep stands, until `budget` units are taken (at least one workgroup) or the pass's samples
+// are all swept. Advances the sweep; returns the units recorded.
+Result<double> RenderViewImpl::recordShading(const PassPlan& plan, Sweep& s, double budget) {
+  double units = 0;
+  while (s.done < plan.count) {
+    const size_t i = plan.visible[s.obj];
+    const ObjectState& o = objects_[i];
+    const uint32_t gx = gridX(o, plan.scale), gy = gridY(o, plan.scale);
+    const uint32_t n = std::min(plan.chunk, plan.count - s.done);
+    const Tiles tiles = chooseTiles(plan, s, units, budget);
+    if (tiles.cols == 0) break;  // this submission is full
+    BRDFA_TRY(dispatchTiles(plan, s, tiles, n));
+    units += tiles.units;
+    // Objects cover disjoint pixels, so their dispatches need no barrier between them; the
+    // next sweep adds to the same pixels and does.
+    s.col += tiles.cols;
+    if (s.col == gx) {
+      s.col = 0;
+      s.row += tiles.rows;
     }
-    stats_.preview = true;
+    if (s.row < gy) continue;
+    s.row = 0;
+    if (++s.obj < plan.visible.size()) continue;
+    s.obj = 0;
+    s.done += n;
+    if (s.done < plan.count)
+      memoryBarrier(s.cb, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_ACCESS_SHADER_WRITE_BIT,
+                    VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_ACCESS_SHADER_READ_BIT | VK_ACCESS_SHADER_WRITE_BIT);
+  }
+  return units;
+}
+
+// The next run of tiles of the current object from where the sweep stands, within what is
+// left of `budget` after `units`: whole rows of workgroups while they fit, else part of one
+// row (at least one workgroup per submission). No columns: the submission is full.
+RenderViewImpl::Tiles RenderViewImpl::chooseTiles(const PassPlan& plan, const Sweep& s, double units,
+                                                  double budget) const {
+  const size_t i = plan.visible[s.obj];
+  const ObjectState& o = objects_[i];
+  const uint32_t gx = gridX(o, plan.scale), gy = gridY(o, plan.scale);
+  const uint32_t n = std::min(plan.chunk, plan.count - s.done);
+  // A preview-kernel dispatch hands over through the scratch, one block per invocation
+  // (a whole row of the image's blocks always fits: see resize).
+  const uint32_t maxRows = plan.byPreviewKernel[i]
+                               ? std::max(1u, previewScratchBlocks_ / (gx * kShadeGroup * kShadeGroup))
+                               : UINT32_MAX;
+  Tiles t;
+  if (s.col == 0) {
+    for (uint32_t r = s.row; r < gy && t.rows < maxRows; ++r, ++t.rows) {
+      double rowUnits = 0;
+      for (uint32_t c = 0; c < gx; ++c) rowUnits += groupUnits(o, size_t(r) * gx + c, n, plan.preview);
+      if (units + t.units + rowUnits > budget) break;
+      t.units += rowUnits;
+    }
+    if (t.rows > 0) t.cols = gx;
+  }
+  if (t.rows == 0) {
+    // A part of a row only where one row alone passes the budget: a tile's left and right
+    // halves differ more than a row's (see dispatchTiles).
+    if (s.col == 0 && units > 0) return Tiles{};
+    t.rows = 1;
+    for (uint32_t c = s.col; c < gx; ++c, ++t.cols) {
+      const double g = groupUnits(o, size_t(s.row) * gx + c, n, plan.preview);
+      if (units + t.units + g > budget && (t.cols > 0 || units > 0)) break;
+      t.units += g;
+    }
+  }
+  return t;
+}
+
+// Records the dispatches of `tiles` of the current object at `n` samples each, by its program
+// or its preview kernel. A preview kernel's stages, the first time in the pass, each end a
+// submission of their own (counted in the sweep).
+Result<void> RenderViewImpl::dispatchTiles(const PassPlan& plan, Sweep& s, const Tiles& tiles, uint32_t n) {
+  const size_t i = plan.visible[s.obj];
+  const ObjectState& o = objects_[i];
+  const VkPipelineLayout layout = r_->computeLayout();
+  ComputePush& push = s.push;
+  push.target[0] = static_cast<uint32_t>(i + 1);
+  // First pass: overwrite, not add (per pixel); a preview (bit 1) overwrites too.
+  push.target[3] = plan.preview ? 2u : plan.firstPass && s.done == 0 ? 1u : 0u;
+  push.frame[2] = static_cast<uint32_t>(stats_.spp + s.done);  // the sequence continues across passes
+  push.frame[3] = n;
+  const ShadeKernel& kernel = plan.byPreviewKernel[i] ? *o.previewKernel : *o.kernel;
+  s.bound.push_back(&kernel);
+  vkCmdBindDescriptorSets(s.cb, VK_PIPELINE_BIND_POINT_COMPUTE, layout, 1, 1, &o.set, 0, nullptr);
+  // One dispatch per band, its rows permuted: llvmpipe hands each thread one contiguous
+  // run of a dispatch's workgroups (lp_cs_tpool: two halves on two cores), and a band's
+  // top and bottom halves can differ in cost several times over (near a sphere's pole).
+  // Workgroup row y shades the band's row (y * step) mod rows, step ~ 0.618 rows and
+  // coprime to it, so every contiguous run of workgroups takes rows spread over the whole
+  // band and the threads finish together. Rows grouped into shorter dispatches instead cost
+  // more per pass on a busy CPU, every dispatch waiting for all its threads.
+  const uint32_t rows = tiles.rows;
+  uint32_t step = 1;
+  if (rows > 2) {
+    step = std::max<uint32_t>(1, static_cast<uint32_t>(std::lround(rows * 0.6180339887)));
+    while (std::gcd(step, rows) != 1) ++step;
+  }
+  const uint32_t permutation = rows | (step << 16);  // rows and step are below 4096 / 8
+  std::memcpy(&push.cameraPos[3], &permutation, sizeof permutation);
+  // Dispatch origin; images are at most 4096 wide.
+  push.target[2] =
+      (o.pixels.x + s.col * kShadeGroup * plan.scale) | ((o.pixels.y + s.row * kShadeGroup * plan.scale) << 16);
+  vkCmdPushConstants(s.cb, layout, VK_SHADER_STAGE_COMPUTE_BIT, 0, sizeof(push), &push);
+  if (!plan.byPreviewKernel[i]) {
+    vkCmdBindPipeline(s.cb, VK_PIPELINE_BIND_POINT_COMPUTE, kernel.kernel->pipeline());
+    vkCmdDispatch(s.cb, tiles.cols, rows, 1);
+    return {};
+  }
+  // The preview kernel's three stages over one grid (kernels/preview.comp.glsl), each
+  // reading what the one before wrote to the scratch; the next dispatch writes it again.
+  const VkPipeline stages[3] = {r_->previewSetupPipeline(env_->constant), kernel.kernel->pipeline(),
+                                r_->previewScatterPipeline()};
+  for (int k = 0; k < 3; ++k) {
+    vkCmdBindPipeline(s.cb, VK_PIPELINE_BIND_POINT_COMPUTE, stages[k]);
+    vkCmdDispatch(s.cb, tiles.cols, rows, 1);
+    memoryBarrier(s.cb, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_ACCESS_SHADER_WRITE_BIT,
+                  VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_ACCESS_SHADER_READ_BIT | VK_ACCESS_SHADER_WRITE_BIT);
+    // The pass's first dispatch of each stage may carry its driver compile (the JIT, at
+    // the first dispatch on lavapipe): each in a submission of its own, so the budget of
+    // a submission meets one compile at a time, as in a program's first pass.
+    if (s.previewStagesCompiled || k == 2) continue;
+    double stageMs = 0;
+    BRDFA_TRY(cmd_.submitAndWait(&stageMs, /*viewPass=*/true));
+    ++s.submissions;
+    s.maxSubmissionMs = std::max(s.maxSubmissionMs, stageMs);
+    auto again = cmd_.begin();
+    if (!again) return again.takeError();
+    s.cb = *again;
+    vkCmdBindDescriptorSets(s.cb, VK_PIPELINE_BIND_POINT_COMPUTE, layout, 0, 1, &viewSets_[plan.slice], 0, nullptr);
+    vkCmdBindDescriptorSets(s.cb, VK_PIPELINE_BIND_POINT_COMPUTE, layout, 1, 1, &o.set, 0, nullptr);
+    vkCmdPushConstants(s.cb, layout, VK_SHADER_STAGE_COMPUTE_BIT, 0, sizeof(push), &push);
+  }
+  s.previewStagesCompiled = true;
+  return {};
+}
+
+// Records what follows the pass's last samples in its last submission: the edge pixels'
+// background samples, and the resolve when the error estimate is due (device resolve only).
+Result<void> RenderViewImpl::recordPassEnd(const PassPlan& plan, Sweep& s) {
+  // Inside the objects' bounds a pixel may be background in this slice and covered in
+  // another (an edge): its background samples are taken with the pass, so the pixel is the
+  // average over its sub-pixel positions. With one slice nothing changes from pass to pass.
+  // A preview leaves them to the first pass: it shows the background the restart wrote.
+  if (jitterCount_ > 1 && !plan.preview) recordBackground(s.cb, coverRect_, plan.slice, plan.count, plan.firstPass);
+  BRDFA_TRY(endPhase(s, s.breakdown.edgeMs));
+  if (plan.refreshError && !r_->hostResolve()) {
+    memoryBarrier(s.cb, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_ACCESS_SHADER_WRITE_BIT,
+                  VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_ACCESS_SHADER_READ_BIT);
+    recordResolve(s.cb, false);
+    BRDFA_TRY(endPhase(s, s.breakdown.resolveMs));
+  }
+  return {};
+}
+
+// After a submission of an unfinished pass: leaves the pass partway, keeping its place in
+// partial_ and its time in stats_, when interruptPass() asked for it (never a preview or first
+// sample) or when a watched pass's next submission would pass its frame target. True when left.
+bool RenderViewImpl::leavePartway(const PassPlan& plan, const Sweep& s, double submissionMs) {
+  // A preview or first sample is not interrupted: it is short, and under changes coming
+  // faster than it (a camera dragged), interrupting it would leave nothing to show at all.
+  const bool interrupted = s.done < plan.count && plan.interruptible && !plan.preview && !plan.firstSample &&
+                           interruptRequested_.exchange(false);
+  // At the frame target: the next submission (about as long as this one) would pass it.
+  const bool frameSpent = s.done < plan.count && plan.sliced && msSince(plan.t0) + submissionMs > plan.frameTargetMs;
+  if (!interrupted && !frameSpent) return false;
+  // Keep the place; spp counts the pass once complete.
+  const double segmentMs = msSince(plan.t0);
+  partial_ = PartialPass{plan.count, plan.slice, plan.chunk,  s.done,
+                         s.row,      s.col,      s.obj,       s.passDone,
+                         (plan.resumed ? plan.resumed->ms : 0.0) + segmentMs, plan.refreshError};
+  stats_.elapsedMs += segmentMs;
+  sinceErrorMs_ += segmentMs;
+  stats_.passInProgress = !interrupted;  // interrupted: a scene change waits, nothing to show
+  return true;
+}
+
+// Completes the pass's statistics once all its samples are swept: a preview counts in the
+// render time only, a first sample stands provisionally for the first pass, and a pass adds
+// its samples, its time (to the pass sizer after the interactive passes) and, when due, a new
+// error estimate. After a pass by the preview kernel the submission costs are learned again.
+FrameStats RenderViewImpl::finishPass(const PassPlan& plan, Sweep& s) {
+  submissionSizer_.passEnded();  // one pass to settle on the new cost
+  const double segmentMs = msSince(plan.t0);  // this call's part of the pass
+  const double passMs = segmentMs + (plan.resumed ? plan.resumed->ms : 0.0);
+  PassBreakdown& breakdown = s.breakdown;
+  auto timed = [&] {
     stats_.elapsedMs += segmentMs;
     stats_.lastPassMs = passMs;
-    stats_.submissions = submissions;
-    stats_.maxSubmissionMs = maxSubmissionMs;
-    if (profile) {
+    stats_.submissions = s.submissions;
+    stats_.maxSubmissionMs = s.maxSubmissionMs;
+  };
+  // What a pass by the preview kernel learned is that kernel's cost: the scene's programs are
+  // still to be compiled (their first submission a warm-up) and measured, as after a change of
+  // program.
+  auto programsNext = [&] {
+    submissionSizer_.forget();
+    for (ObjectState& o : objects_) o.previewKernel.reset();
+  };
+  if (plan.preview) {  // counts in no statistic but the render time
+    previewPending_ = false;
+    if (plan.previewKernelPass) programsNext();
+    stats_.preview = true;
+    timed();
+    if (s.profile) {
       breakdown.otherMs = passMs - breakdown.setupMs - breakdown.shadeMs - breakdown.edgeMs - breakdown.resolveMs;
       stats_.breakdown = breakdown;
     }
     return stats_;
   }
   stats_.preview = false;
-  if (firstSample) {
-    // Not a pass (passes stays 0): the next one, by the programs, overwrites it. What was
-    // learned is the preview kernel's cost, as after a preview by it.
+  if (plan.firstSample) {
+    // Not a pass (passes stays 0): the next one, by the programs, overwrites it.
     firstSamplePending_ = false;
-    msPerUnit_ = priorMsPerUnit_ = maxUnits_ = 0;
-    warmUp_ = true;
-    for (ObjectState& o : objects_) o.previewKernel.reset();
-    stats_.spp = count;
+    programsNext();
+    stats_.spp = plan.count;
     stats_.provisional = true;
-    stats_.elapsedMs += segmentMs;
-    stats_.lastPassMs = passMs;
-    stats_.submissions = submissions;
-    stats_.maxSubmissionMs = maxSubmissionMs;
+    timed();
     stats_.nanSamples = *static_cast<const uint32_t*>(counters_.mapped());
     stats_.breakdown = breakdown;
     return stats_;
   }
   // The first passes after a restart carry the restart's work or are split into short
   // submissions (kInteractivePasses): their times would read as a large fixed part.
-  if (stats_.passes >= kInteractivePasses) sizer_.record(count, passMs);
-  stats_.spp += count;
+  if (stats_.passes >= kInteractivePasses) sizer_.record(plan.count, passMs);
+  stats_.spp += plan.count;
   stats_.passes += 1;
-  stats_.elapsedMs += segmentMs;
-  stats_.lastPassMs = passMs;
-  stats_.submissions = submissions;
-  stats_.maxSubmissionMs = maxSubmissionMs;
+  timed();
   stats_.nanSamples = *static_cast<const uint32_t*>(counters_.mapped());
   sinceErrorMs_ += segmentMs;
-  if (refreshError) {
+  if (plan.refreshError) {
     const auto tResolve = std::chrono::steady_clock::now();
     setRelError(r_->hostResolve() ? resolveOnHost(hostResolveInput(), nullptr, nullptr) : deviceErrorSums());
-    if (profile) breakdown.resolveMs += msSince(tResolve);
+    if (s.profile) breakdown.resolveMs += msSince(tResolve);
   }
   updateDone();
-  if (profile) {
-    const double total = msSince(t0) + (resumed ? resumed->ms : 0.0);
+  if (s.profile) {
+    const double total = msSince(plan.t0) + (plan.resumed ? plan.resumed->ms : 0.0);
     breakdown.otherMs = total - breakdown.setupMs - breakdown.shadeMs - breakdown.edgeMs - breakdown.resolveMs;
     stats_.lastPassMs = total;
   }

@@ -2,6 +2,7 @@
 #pragma once
 
 #include <atomic>
+#include <chrono>
 #include <memory>
 #include <mutex>
 #include <optional>
@@ -12,6 +13,7 @@
 #include "host_resolve.h"
 #include "pass_sizer.h"
 #include "scene_math.h"
+#include "submission_sizer.h"
 #include "renderer_impl.h"
 
 namespace brdfa {
@@ -49,10 +51,92 @@ class RenderViewImpl final : public RenderView {
     std::vector<uint32_t> cover;
   };
 
+  // A pass interrupted between two submissions (interruptPass): where its sweep stood, so the
+  // next pass completes it with the same samples. A restart drops it. Never a preview, which
+  // is not interrupted (and a restart is what makes one pending).
+  struct PartialPass {
+    uint32_t count = 0, slice = 0, chunk = 0;  // the pass's samples, G-buffer slice, samples per sweep
+    uint32_t done = 0, row = 0, col = 0;       // samples swept, workgroup row and column in the object
+    size_t obj = 0;                             // index into the visible objects
+    double passDone = 0;                        // cost units shaded so far
+    double ms = 0;                              // wall time spent on it so far
+    bool refreshError = false;
+  };
+  // What one pass does, decided before its first submission (planPass).
+  struct PassPlan {
+    bool interruptible = false;
+    double frameTargetMs = 0;                  // as in renderPass (0: none)
+    std::chrono::steady_clock::time_point t0;  // when this call's part of the pass began
+    std::optional<PartialPass> resumed;        // the interrupted pass this one completes
+    bool preview = false, firstSample = false, firstPass = false;
+    bool refreshError = false;  // the error estimate is refreshed at the pass's end
+    bool sliced = false;        // a watched pass: may return partway at its frame target
+    uint32_t scale = 1;         // pixels per dispatched invocation, per axis (2: a preview)
+    uint32_t count = 0, slice = 0, chunk = 0;  // samples, G-buffer slice, samples per sweep
+    std::vector<bool> byPreviewKernel;  // per object: shaded by its preview kernel
+    bool previewKernelPass = false;     // some object is
+    std::vector<size_t> visible;        // objects on screen
+    double passUnits = 0;               // the whole pass's cost units
+    double targetMs = 0;                // device time a submission aims at (0: no split)
+  };
+  // Where a pass's sweep stands and what its submissions measured (runSweep).
+  struct Sweep {
+    uint32_t done = 0, row = 0, col = 0;  // samples swept, workgroup row and column in the object
+    size_t obj = 0;                        // index into the visible objects
+    double passDone = 0;                   // cost units shaded so far
+    ComputePush push{};                    // the shade kernels' push constants
+    VkCommandBuffer cb = VK_NULL_HANDLE;   // the submission being recorded
+    bool profile = false;                  // RendererOptions::profilePasses
+    PassBreakdown breakdown;
+    uint64_t submissions = 0;
+    double maxSubmissionMs = 0;
+    std::vector<const ShadeKernel*> bound;  // kernels the submission being recorded dispatches
+    bool previewStagesCompiled = false;     // the preview kernel's stages have run in this pass
+  };
+  // A run of tiles of one object's workgroup grid, and its cost units.
+  struct Tiles {
+    uint32_t cols = 0, rows = 0;
+    double units = 0;
+  };
+
   // The pass of renderPass, under mutex_; an `interruptible` one ends early on interruptPass().
-  // frameTargetMs as in renderPass (0: none).
+  // frameTargetMs as in renderPass (0: none). Plans the pass, sweeps it in submissions and
+  // finishes its statistics, or leaves it partway.
   Result<FrameStats> passLocked(bool interruptible, double frameTargetMs = 0);
+  PassPlan planPass(bool interruptible, double frameTargetMs);
+  Sweep startSweep(const PassPlan& plan) const;
+  Result<bool> runSweep(const PassPlan& plan, Sweep& s);
+  Result<double> recordShading(const PassPlan& plan, Sweep& s, double budget);
+  Tiles chooseTiles(const PassPlan& plan, const Sweep& s, double units, double budget) const;
+  Result<void> dispatchTiles(const PassPlan& plan, Sweep& s, const Tiles& tiles, uint32_t n);
+  Result<void> recordPassEnd(const PassPlan& plan, Sweep& s);
+  bool leavePartway(const PassPlan& plan, const Sweep& s, double submissionMs);
+  FrameStats finishPass(const PassPlan& plan, Sweep& s);
+  // With profiling, ends the submission being recorded, adds its time to `phaseMs` and begins
+  // the next; nothing otherwise.
+  Result<void> endPhase(Sweep& s, double& phaseMs);
+  // Cost units of workgroup `group` of `o`'s grid at `n` samples per pixel.
+  static double groupUnits(const ObjectState& o, size_t group, uint32_t n, bool preview);
+  // An object's dispatch grid: workgroups over its bounds (over its 2x2 blocks in a preview).
+  static uint32_t gridX(const ObjectState& o, uint32_t scale);
+  static uint32_t gridY(const ObjectState& o, uint32_t scale);
+  // How a new scene differs from the view's (compareScene).
+  struct SceneChange {
+    bool sameShading = false;      // same programs, parameters, textures and lighting, same size
+    bool samePrograms = false;     // same pipelines, in object order
+    bool geometryChanged = false;  // camera, meshes, transforms or size
+    bool lightingChanged = false;  // environment, sampling or seed
+    bool restart = false;          // the image starts again
+    bool displayChanged = false;   // exposure, tone map or the limits of the render
+  };
+  SceneChange compareScene(const Scene& scene, const std::vector<ObjectState>& objects, bool resized) const;
+  void adoptScene(const Scene& scene, std::vector<ObjectState> objects, const SceneChange& change);
+  void describeScene(uint64_t dropsBefore);
+  // Sizes the view for width x height within the renderer's view-memory budget: a refused size
+  // leaves the view as it was.
   Result<void> resize(uint32_t width, uint32_t height);
+  Result<void> createTargets(uint32_t width, uint32_t height);
+  Result<void> createBuffers(uint32_t width, uint32_t height, uint32_t scratchBlocks);
   void writeViewDescriptors();
   // `prebuilt`: prebuildKernels(scene), used where it holds an object's kernels.
   Result<std::vector<ObjectState>> buildObjects(const Scene& scene,
@@ -130,29 +214,13 @@ class RenderViewImpl final : public RenderView {
   std::vector<ObjectState> objects_;
   bool clearPending_ = true;
   bool blockBackground_ = false;  // the background holds a preview's 2x2 blocks (recordPending)
-  // Splitting passes into submissions of about ctx().submissionTargetMs(fence) (see renderPass): the
-  // device cost of shading learned from this view's own submissions, in ms per cost unit (about
-  // a pixel-sample; 0: not measured since the shading last changed), and the largest
-  // submission measured so far in those units (growth is bounded by a multiple of it).
-  double msPerUnit_ = 0;
-  double maxUnits_ = 0;
-  bool warmUp_ = true;  // the next shading submission is a warm-up (see renderPass)
-  double priorMsPerUnit_ = 0;  // msPerUnit_ before a change of parameters only (see renderPass)
+  // Splits passes into submissions of about ctx().submissionTargetMs(fence) (see renderPass),
+  // from what this view's own submissions cost.
+  SubmissionSizer submissionSizer_;
   bool coverageKnown_ = false;  // ObjectState::cover is measured for the current geometry
   double sinceErrorMs_ = 0;  // pass time since rel_error was last refreshed
   PassSizer sizer_;  // what passes of each size took since the last restart (renderPass's frame target)
   FrameStats stats_;
-  // A pass interrupted between two submissions (interruptPass): where its sweep stood, so the
-  // next pass completes it with the same samples. A restart drops it. Never a preview, which
-  // is not interrupted (and a restart is what makes one pending).
-  struct PartialPass {
-    uint32_t count = 0, slice = 0, chunk = 0;  // the pass's samples, G-buffer slice, samples per sweep
-    uint32_t done = 0, row = 0, col = 0;       // samples swept, workgroup row and column in the object
-    size_t obj = 0;                             // index into the visible objects
-    double passDone = 0;                        // cost units shaded so far
-    double ms = 0;                              // wall time spent on it so far
-    bool refreshError = false;
-  };
   bool previewPending_ = false;  // the next pass is a preview (RenderSettings::previewPass)
   bool firstSamplePending_ = false;  // the next pass is a first sample (RenderSettings::firstSampleKernel)
   std::optional<PartialPass> partial_;
