@@ -14,6 +14,18 @@
 
 namespace brdfa::server {
 
+// A route handler with the Service it works on; withService binds one into what httplib takes.
+using RouteHandler = void (*)(Service&, const httplib::Request&, httplib::Response&);
+using ReadingRouteHandler = void (*)(Service&, const httplib::Request&, httplib::Response&,
+                                     const httplib::ContentReader&);
+inline httplib::Server::Handler withService(Service& service, RouteHandler handler) {
+  return [&service, handler](const httplib::Request& req, httplib::Response& res) { handler(service, req, res); };
+}
+inline httplib::Server::HandlerWithContentReader withService(Service& service, ReadingRouteHandler handler) {
+  return [&service, handler](const httplib::Request& req, httplib::Response& res,
+                             const httplib::ContentReader& reader) { handler(service, req, res, reader); };
+}
+
 // First: the pre-routing gate (cross-site refusals, the requester's identity, 401).
 void registerAccessGate(httplib::Server& server, Service& service);
 void registerAuthRoutes(httplib::Server& server, Service& service);  // /api/auth/...

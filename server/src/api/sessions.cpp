@@ -230,7 +230,8 @@ std::shared_ptr<Session> sessionOr404(Service& service, const httplib::Request& 
       session && (canReadSession(who, *session) || (access == SessionAccess::ReadWithKey && hasViewKey(req, *session)));
   if (!mayRead && !requesterKnown(req)) {  // a view-key read without the right key: as any tokenless request
     res.set_header("WWW-Authenticate", "Bearer realm=\"brdfa\"");
-    sendError(res, 401, "unauthorized", "this key does not read session '" + id + "'; send a token or the view key");
+    sendError(res, 401, "unauthorized",
+              "this key does not read session '" + id + "'; send a token or the view key");
     return nullptr;
   }
   if (!mayRead) {
@@ -255,242 +256,263 @@ bool requireScene(Session& session, httplib::Response& res) {
   return false;
 }
 
+namespace {
+
+void listSessions(Service& service, const httplib::Request& req, httplib::Response& res) {
+  const Identity& who = requester(req);
+  nlohmann::json list = nlohmann::json::array();
+  for (auto& s : service.sessions->list())
+    if (canReadSession(who, *s)) list.push_back(sessionSummary(*s, who, service.config.replica));
+  if (service.directory)
+    for (const RemoteSession& s : service.directory->others())
+      if (canRead(who, s.ownership.user)) list.push_back(remoteSummary(s, who));
+  sendJson(res, list);
+}
+
+void createSession(Service& service, const httplib::Request& req, httplib::Response& res) {
+  if (refuseWhileDraining(service, res)) return;
+  nlohmann::json body = nlohmann::json::object();
+  if (!req.body.empty()) {
+    auto parsed = readJsonBody(req, res);
+    if (!parsed) return;
+    body = std::move(*parsed);
+  }
+  // Validated before the session exists, so a bad scene leaves nothing behind.
+  const Identity& who = requester(req);
+  std::vector<std::string> notes;
+  Result<Scene> scene = sceneFromJson(body, service.resolver(who), &notes);
+  if (!scene) return sendError(res, scene.error());
+  const int quota = service.quotaFor(who, &Quotas::sessions);
+  // The quota is the person's, not the replica's: sessions they hold on other replicas count.
+  const size_t elsewhere = quota > 0 ? sessionsElsewhere(service, who) : 0;
+  SessionManager::Created created;
+  if (quota > 0 && elsewhere >= size_t(quota))
+    created.quotaFull = true;
+  else
+    created =
+        service.sessions->create({}, SessionOwnership{who.owner(), who.displayName, {}}, size_t(quota) - elsewhere);
+  if (created.quotaFull) {
+    const size_t used = created.ownerSessions + elsewhere;
+    return sendQuotaExceeded(res, "sessions", uint64_t(quota), used,
+                             "you have " + std::to_string(used) +
+                                 " sessions, the most one person may have (--quota-sessions " + std::to_string(quota) +
+                                 "); delete one (DELETE /api/sessions/{id}) or close a tab");
+  }
+  if (created.full)
+    return sendError(res, 429, "too_many_sessions",
+                     "at most " + std::to_string(service.sessions->maxSessions()) + " sessions; delete one first");
+  if (!created.session) return sendError(res, *created.error);
+  nlohmann::json full = sceneToJson(scene.value(), notes);
+  {
+    auto lock = created.session->beginSceneUpdate(false);
+    Result<void> applied = created.session->applyScene(lock, scene.value(), full);
+    if (!applied) {
+      lock.unlock();
+      service.sessions->remove(created.session->id());
+      return sendError(res, applied.error());
+    }
+  }
+  res.set_header("Location", "/api/sessions/" + created.session->id());
+  sendJson(res, {{"id", created.session->id()}, {"view_key", created.session->ownership().viewKey}, {"scene", full}},
+           201);
+}
+
+void getSession(Service& service, const httplib::Request& req, httplib::Response& res) {
+  auto session = sessionOr404(service, req, res, SessionAccess::Read);
+  if (!session) return;
+  nlohmann::json body = sessionSummary(*session, requester(req), service.config.replica);
+  body["scene"] = session->sceneJson();
+  sendJson(res, body);
+}
+
+void deleteSession(Service& service, const httplib::Request& req, httplib::Response& res) {
+  std::string id = req.matches[1];
+  if (auto session = service.sessions->find(id); session && id != kDefaultSessionId) {
+    const Identity& who = requester(req);
+    if (!canReadSession(who, *session))
+      return sendError(res, 404, "not_found", "no session '" + id + "'", "session");
+    if (!canDelete(who, session->owner()))
+      return sendError(res, 403, "forbidden", "only its owner or the teacher deletes session '" + id + "'",
+                       "session");
+  }
+  switch (service.sessions->remove(id)) {
+    case SessionManager::RemoveOutcome::Removed:
+      res.status = 204;
+      return;
+    case SessionManager::RemoveOutcome::NotFound:
+      return sendError(res, 404, "not_found", "no session '" + id + "'", "session");
+    case SessionManager::RemoveOutcome::Protected:
+      return sendError(res, 409, "conflict", "the default session cannot be deleted", "session");
+  }
+}
+
+void getScene(Service& service, const httplib::Request& req, httplib::Response& res) {
+  auto session = sessionOr404(service, req, res, SessionAccess::Read);
+  if (!session || !requireScene(*session, res)) return;
+  sendJson(res, session->sceneJson());
+}
+
+void putScene(Service& service, const httplib::Request& req, httplib::Response& res) {
+  auto session = sessionOr404(service, req, res, SessionAccess::Write, /*initialize=*/false);
+  if (!session) return;
+  auto body = readJsonBody(req, res);
+  if (!body) return;
+  auto lock = session->beginSceneUpdate(false);  // replaced anyway: no need for the default
+  applySceneJson(service, requester(req), *session, lock, *body, res);
+}
+
+// RFC 7386 JSON merge patch onto the current (full) scene JSON, then validated as a whole.
+// Arrays are replaced, not merged: to change one object, send the whole "objects" array.
+void patchScene(Service& service, const httplib::Request& req, httplib::Response& res) {
+  auto session = sessionOr404(service, req, res, SessionAccess::Write, /*initialize=*/false);
+  if (!session) return;
+  auto patch = readJsonBody(req, res);
+  if (!patch) return;
+  auto lock = session->beginSceneUpdate(true);
+  nlohmann::json merged = session->sceneJson();
+  if (merged.is_null()) merged = nlohmann::json::object();
+  merged.merge_patch(*patch);
+  applySceneJson(service, requester(req), *session, lock, merged, res);
+}
+
+void getStats(Service& service, const httplib::Request& req, httplib::Response& res) {
+  auto session = sessionOr404(service, req, res, SessionAccess::Read);
+  if (!session) return;
+  session->touch();  // a client polling stats is watching
+  sendJson(res, statsToJson(session->stats(), session->renderError(), session->renderSettings()));
+}
+
+// Error against render time since the last accumulation restart (convergence.h): JSON with
+// the log-log fit, or ?format=csv. ?target=X predicts when rel_error reaches X (default: the
+// scene's render.target_error); ?max_points=N thins the answer evenly in log-time.
+void getConvergence(Service& service, const httplib::Request& req, httplib::Response& res) {
+  const std::string format = req.has_param("format") ? req.get_param_value("format") : "json";
+  if (format != "json" && format != "csv")
+    return sendError(res, 400, "invalid_argument", "format must be json or csv", "format");
+  std::optional<double> target;
+  if (req.has_param("target")) {
+    target = parseTargetError(req.get_param_value("target"));
+    if (!target) return sendError(res, 400, "invalid_argument", "target must be a number in (0, 1)", "target");
+  }
+  size_t maxPoints = ConvergenceSeries::kMaxPoints;
+  if (req.has_param("max_points")) {
+    auto parsed = parseMinSpp(req.get_param_value("max_points"));
+    if (!parsed || *parsed < 2 || *parsed > ConvergenceSeries::kMaxPoints)
+      return sendError(res, 400, "invalid_argument",
+                       "max_points must be an integer in [2, " + std::to_string(ConvergenceSeries::kMaxPoints) + "]",
+                       "max_points");
+    maxPoints = static_cast<size_t>(*parsed);
+  }
+  auto session = sessionOr404(service, req, res, SessionAccess::Read);
+  if (!session) return;
+  session->touch();  // a client following the curve is watching
+  if (!requireScene(*session, res)) return;
+  Session::Convergence c = session->convergence();
+  if (!target && c.render.targetError > 0) target = c.render.targetError;
+  res.set_header("Cache-Control", "no-store");
+  if (format == "csv") return sendBody(res, convergenceCsv(thinLogTime(c.points, maxPoints)), "text/csv");
+  sendJson(res, convergenceJson(c, target, maxPoints));
+}
+
+void getFrame(Service& service, const httplib::Request& req, httplib::Response& res) {
+  std::optional<FrameFormat> format =
+      frameFormatFromName(req.has_param("format") ? req.get_param_value("format") : "png");
+  if (!format)
+    return sendError(res, 400, "invalid_argument", std::string("format must be ") + kFrameFormatChoices, "format");
+  std::optional<bool> download = readDownloadParam(req, res);
+  if (!download) return;
+  // Default 1: "the latest frame" always has at least one sample in it (not a black image
+  // right after a scene change). min_spp=0 answers at once with whatever there is.
+  uint64_t minSpp = 1;
+  if (req.has_param("min_spp")) {
+    auto parsed = parseMinSpp(req.get_param_value("min_spp"));
+    if (!parsed) return sendError(res, 400, "invalid_argument", "min_spp must be a non-negative integer", "min_spp");
+    minSpp = *parsed;
+  }
+  auto session = sessionOr404(service, req, res, SessionAccess::ReadWithKey);
+  if (!session) return;
+  session->touch();
+  if (!requireScene(*session, res)) return;
+  // Only waits that can last hold a worker; an answer available now never counts.
+  if (service.frameWaiters.fetch_add(1) >= service.maxFrameWaiters) {
+    service.frameWaiters.fetch_sub(1);
+    return sendError(res, 503, "busy",
+                     "too many requests waiting for samples (at most " + std::to_string(service.maxFrameWaiters) +
+                         "); retry later or without min_spp");
+  }
+  // The session encodes PNG or PFM; EXR is made from the PFM's floats (the same radiance).
+  const bool pfm = frameFormatIsFloat(*format);
+  Session::WaitOutcome outcome = Session::WaitOutcome::Reached;
+  auto frame = session->waitAndEncodeFrame(minSpp, kFrameWait, pfm, outcome);
+  service.frameWaiters.fetch_sub(1);
+  switch (outcome) {
+    case Session::WaitOutcome::Stopped:
+      return sendError(res, 503, "unavailable",
+                       "the session was stopped (deleted, or the server is shutting down)");
+    case Session::WaitOutcome::Failed:
+      if (auto err = session->renderError()) return sendError(res, *err);
+      break;
+    case Session::WaitOutcome::Reached:
+    case Session::WaitOutcome::TimedOut:  // bounded wait: answer with what there is
+      break;
+  }
+  if (!frame) return sendError(res, frame.error());
+  if (*format == FrameFormat::Exr) {
+    Frame linear;
+    if (!decodePfm(frame->bytes, linear.width, linear.height, linear.rgba32f))
+      return sendError(res, 500, "internal", "could not read back the frame's float radiance");
+    frame->bytes = encodeFrame(linear, FrameFormat::Exr);
+  }
+  sendFrame(res, frame->bytes, *format, frame->stats, session->id(), *download);
+}
+
+// multipart/x-mixed-replace: each part is one PNG. The render thread publishes at most ~30
+// frames/s (and always the converged one); each client sends the latest when it is newer
+// than what it sent last, so a slow client skips frames and never holds up rendering.
+void streamFrames(Service& service, const httplib::Request& req, httplib::Response& res) {
+  auto session = sessionOr404(service, req, res, SessionAccess::ReadWithKey);
+  if (!session) return;
+  if (service.activeStreams.fetch_add(1) >= service.maxStreams) {
+    service.activeStreams.fetch_sub(1);
+    return sendError(res, 503, "too_many_streams",
+                     "at most " + std::to_string(service.maxStreams) + " concurrent streams");
+  }
+  session->addStreamClient();
+  auto state = std::make_shared<StreamState>();
+  state->minSceneVersion = session->stats().sceneVersion;
+  res.set_header("Cache-Control", "no-store");
+  // Chunked: HTTP/1.1 framing with an explicit end when the stream stops (server shutdown,
+  // session deleted), instead of a body that ends only when the connection closes.
+  res.set_chunked_content_provider(
+      "multipart/x-mixed-replace; boundary=frame",
+      [&service, session, state](size_t, httplib::DataSink& sink) -> bool {
+        // Runs outside httplib's handler try/catch: an exception here would end the process.
+        try {
+          return writeNextPart(service, *session, *state, sink);
+        } catch (const std::exception&) {
+          return false;  // drops this client; the session and other clients go on
+        }
+      },
+      [&service, session](bool) {
+        session->removeStreamClient();
+        service.activeStreams.fetch_sub(1);
+      });
+}
+
+}  // namespace
 
 void registerSessionRoutes(httplib::Server& server, Service& service) {
-  server.Get("/api/sessions", [&service](const httplib::Request& req, httplib::Response& res) {
-    const Identity& who = requester(req);
-    nlohmann::json list = nlohmann::json::array();
-    for (auto& s : service.sessions->list())
-      if (canReadSession(who, *s)) list.push_back(sessionSummary(*s, who, service.config.replica));
-    if (service.directory)
-      for (const RemoteSession& s : service.directory->others())
-        if (canRead(who, s.ownership.user)) list.push_back(remoteSummary(s, who));
-    sendJson(res, list);
-  });
-
-  server.Post("/api/sessions", [&service](const httplib::Request& req, httplib::Response& res) {
-    if (refuseWhileDraining(service, res)) return;
-    nlohmann::json body = nlohmann::json::object();
-    if (!req.body.empty()) {
-      auto parsed = readJsonBody(req, res);
-      if (!parsed) return;
-      body = std::move(*parsed);
-    }
-    // Validated before the session exists, so a bad scene leaves nothing behind.
-    const Identity& who = requester(req);
-    std::vector<std::string> notes;
-    Result<Scene> scene = sceneFromJson(body, service.resolver(who), &notes);
-    if (!scene) return sendError(res, scene.error());
-    const int quota = service.quotaFor(who, &Quotas::sessions);
-    // The quota is the person's, not the replica's: sessions they hold on other replicas count.
-    const size_t elsewhere = quota > 0 ? sessionsElsewhere(service, who) : 0;
-    SessionManager::Created created;
-    if (quota > 0 && elsewhere >= size_t(quota)) created.quotaFull = true;
-    else created = service.sessions->create({}, SessionOwnership{who.owner(), who.displayName, {}}, size_t(quota) - elsewhere);
-    if (created.quotaFull) {
-      const size_t used = created.ownerSessions + elsewhere;
-      return sendQuotaExceeded(
-          res, "sessions", uint64_t(quota), used,
-          "you have " + std::to_string(used) + " sessions, the most one person may have (--quota-sessions " +
-              std::to_string(quota) + "); delete one (DELETE /api/sessions/{id}) or close a tab");
-    }
-    if (created.full)
-      return sendError(res, 429, "too_many_sessions",
-                       "at most " + std::to_string(service.sessions->maxSessions()) + " sessions; delete one first");
-    if (!created.session) return sendError(res, *created.error);
-    nlohmann::json full = sceneToJson(scene.value(), notes);
-    {
-      auto lock = created.session->beginSceneUpdate(false);
-      Result<void> applied = created.session->applyScene(lock, scene.value(), full);
-      if (!applied) {
-        lock.unlock();
-        service.sessions->remove(created.session->id());
-        return sendError(res, applied.error());
-      }
-    }
-    res.set_header("Location", "/api/sessions/" + created.session->id());
-    sendJson(res, {{"id", created.session->id()}, {"view_key", created.session->ownership().viewKey}, {"scene", full}},
-             201);
-  });
-
-  server.Get("/api/sessions/([^/]+)", [&service](const httplib::Request& req, httplib::Response& res) {
-    auto session = sessionOr404(service, req, res, SessionAccess::Read);
-    if (!session) return;
-    nlohmann::json body = sessionSummary(*session, requester(req), service.config.replica);
-    body["scene"] = session->sceneJson();
-    sendJson(res, body);
-  });
-
-  server.Delete("/api/sessions/([^/]+)", [&service](const httplib::Request& req, httplib::Response& res) {
-    std::string id = req.matches[1];
-    if (auto session = service.sessions->find(id); session && id != kDefaultSessionId) {
-      const Identity& who = requester(req);
-      if (!canReadSession(who, *session)) return sendError(res, 404, "not_found", "no session '" + id + "'", "session");
-      if (!canDelete(who, session->owner()))
-        return sendError(res, 403, "forbidden", "only its owner or the teacher deletes session '" + id + "'", "session");
-    }
-    switch (service.sessions->remove(id)) {
-      case SessionManager::RemoveOutcome::Removed:
-        res.status = 204;
-        return;
-      case SessionManager::RemoveOutcome::NotFound:
-        return sendError(res, 404, "not_found", "no session '" + id + "'", "session");
-      case SessionManager::RemoveOutcome::Protected:
-        return sendError(res, 409, "conflict", "the default session cannot be deleted", "session");
-    }
-  });
-
-  server.Get("/api/sessions/([^/]+)/scene", [&service](const httplib::Request& req, httplib::Response& res) {
-    auto session = sessionOr404(service, req, res, SessionAccess::Read);
-    if (!session || !requireScene(*session, res)) return;
-    sendJson(res, session->sceneJson());
-  });
-
-  server.Put("/api/sessions/([^/]+)/scene", [&service](const httplib::Request& req, httplib::Response& res) {
-    auto session = sessionOr404(service, req, res, SessionAccess::Write, /*initialize=*/false);
-    if (!session) return;
-    auto body = readJsonBody(req, res);
-    if (!body) return;
-    auto lock = session->beginSceneUpdate(false);  // replaced anyway: no need for the default
-    applySceneJson(service, requester(req), *session, lock, *body, res);
-  });
-
-  // RFC 7386 JSON merge patch onto the current (full) scene JSON, then validated as a whole.
-  // Arrays are replaced, not merged: to change one object, send the whole "objects" array.
-  server.Patch("/api/sessions/([^/]+)/scene", [&service](const httplib::Request& req, httplib::Response& res) {
-    auto session = sessionOr404(service, req, res, SessionAccess::Write, /*initialize=*/false);
-    if (!session) return;
-    auto patch = readJsonBody(req, res);
-    if (!patch) return;
-    auto lock = session->beginSceneUpdate(true);
-    nlohmann::json merged = session->sceneJson();
-    if (merged.is_null()) merged = nlohmann::json::object();
-    merged.merge_patch(*patch);
-    applySceneJson(service, requester(req), *session, lock, merged, res);
-  });
-
-  server.Get("/api/sessions/([^/]+)/stats", [&service](const httplib::Request& req, httplib::Response& res) {
-    auto session = sessionOr404(service, req, res, SessionAccess::Read);
-    if (!session) return;
-    session->touch();  // a client polling stats is watching
-    sendJson(res, statsToJson(session->stats(), session->renderError(), session->renderSettings()));
-  });
-
-  // Error against render time since the last accumulation restart (convergence.h): JSON with
-  // the log-log fit, or ?format=csv. ?target=X predicts when rel_error reaches X (default: the
-  // scene's render.target_error); ?max_points=N thins the answer evenly in log-time.
-  server.Get("/api/sessions/([^/]+)/convergence", [&service](const httplib::Request& req, httplib::Response& res) {
-    const std::string format = req.has_param("format") ? req.get_param_value("format") : "json";
-    if (format != "json" && format != "csv")
-      return sendError(res, 400, "invalid_argument", "format must be json or csv", "format");
-    std::optional<double> target;
-    if (req.has_param("target")) {
-      target = parseTargetError(req.get_param_value("target"));
-      if (!target) return sendError(res, 400, "invalid_argument", "target must be a number in (0, 1)", "target");
-    }
-    size_t maxPoints = ConvergenceSeries::kMaxPoints;
-    if (req.has_param("max_points")) {
-      auto parsed = parseMinSpp(req.get_param_value("max_points"));
-      if (!parsed || *parsed < 2 || *parsed > ConvergenceSeries::kMaxPoints)
-        return sendError(res, 400, "invalid_argument",
-                         "max_points must be an integer in [2, " + std::to_string(ConvergenceSeries::kMaxPoints) + "]",
-                         "max_points");
-      maxPoints = static_cast<size_t>(*parsed);
-    }
-    auto session = sessionOr404(service, req, res, SessionAccess::Read);
-    if (!session) return;
-    session->touch();  // a client following the curve is watching
-    if (!requireScene(*session, res)) return;
-    Session::Convergence c = session->convergence();
-    if (!target && c.render.targetError > 0) target = c.render.targetError;
-    res.set_header("Cache-Control", "no-store");
-    if (format == "csv") return sendBody(res, convergenceCsv(thinLogTime(c.points, maxPoints)), "text/csv");
-    sendJson(res, convergenceJson(c, target, maxPoints));
-  });
-
-  server.Get("/api/sessions/([^/]+)/frame", [&service](const httplib::Request& req, httplib::Response& res) {
-    std::optional<FrameFormat> format =
-        frameFormatFromName(req.has_param("format") ? req.get_param_value("format") : "png");
-    if (!format)
-      return sendError(res, 400, "invalid_argument", std::string("format must be ") + kFrameFormatChoices, "format");
-    std::optional<bool> download = readDownloadParam(req, res);
-    if (!download) return;
-    // Default 1: "the latest frame" always has at least one sample in it (not a black image
-    // right after a scene change). min_spp=0 answers at once with whatever there is.
-    uint64_t minSpp = 1;
-    if (req.has_param("min_spp")) {
-      auto parsed = parseMinSpp(req.get_param_value("min_spp"));
-      if (!parsed) return sendError(res, 400, "invalid_argument", "min_spp must be a non-negative integer", "min_spp");
-      minSpp = *parsed;
-    }
-    auto session = sessionOr404(service, req, res, SessionAccess::ReadWithKey);
-    if (!session) return;
-    session->touch();
-    if (!requireScene(*session, res)) return;
-    // Only waits that can last hold a worker; an answer available now never counts.
-    if (service.frameWaiters.fetch_add(1) >= service.maxFrameWaiters) {
-      service.frameWaiters.fetch_sub(1);
-      return sendError(res, 503, "busy",
-                       "too many requests waiting for samples (at most " + std::to_string(service.maxFrameWaiters) +
-                           "); retry later or without min_spp");
-    }
-    // The session encodes PNG or PFM; EXR is made from the PFM's floats (the same radiance).
-    const bool pfm = frameFormatIsFloat(*format);
-    Session::WaitOutcome outcome = Session::WaitOutcome::Reached;
-    auto frame = session->waitAndEncodeFrame(minSpp, kFrameWait, pfm, outcome);
-    service.frameWaiters.fetch_sub(1);
-    switch (outcome) {
-      case Session::WaitOutcome::Stopped:
-        return sendError(res, 503, "unavailable", "the session was stopped (deleted, or the server is shutting down)");
-      case Session::WaitOutcome::Failed:
-        if (auto err = session->renderError()) return sendError(res, *err);
-        break;
-      case Session::WaitOutcome::Reached:
-      case Session::WaitOutcome::TimedOut:  // bounded wait: answer with what there is
-        break;
-    }
-    if (!frame) return sendError(res, frame.error());
-    if (*format == FrameFormat::Exr) {
-      Frame linear;
-      if (!decodePfm(frame->bytes, linear.width, linear.height, linear.rgba32f))
-        return sendError(res, 500, "internal", "could not read back the frame's float radiance");
-      frame->bytes = encodeFrame(linear, FrameFormat::Exr);
-    }
-    sendFrame(res, frame->bytes, *format, frame->stats, session->id(), *download);
-  });
-
-  // multipart/x-mixed-replace: each part is one PNG. The render thread publishes at most ~30
-  // frames/s (and always the converged one); each client sends the latest when it is newer
-  // than what it sent last, so a slow client skips frames and never holds up rendering.
-  server.Get("/api/sessions/([^/]+)/stream", [&service](const httplib::Request& req, httplib::Response& res) {
-    auto session = sessionOr404(service, req, res, SessionAccess::ReadWithKey);
-    if (!session) return;
-    if (service.activeStreams.fetch_add(1) >= service.maxStreams) {
-      service.activeStreams.fetch_sub(1);
-      return sendError(res, 503, "too_many_streams",
-                       "at most " + std::to_string(service.maxStreams) + " concurrent streams");
-    }
-    session->addStreamClient();
-    auto state = std::make_shared<StreamState>();
-    state->minSceneVersion = session->stats().sceneVersion;
-    res.set_header("Cache-Control", "no-store");
-    // Chunked: HTTP/1.1 framing with an explicit end when the stream stops (server shutdown,
-    // session deleted), instead of a body that ends only when the connection closes.
-    res.set_chunked_content_provider(
-        "multipart/x-mixed-replace; boundary=frame",
-        [&service, session, state](size_t, httplib::DataSink& sink) -> bool {
-          // Runs outside httplib's handler try/catch: an exception here would end the process.
-          try {
-            return writeNextPart(service, *session, *state, sink);
-          } catch (const std::exception&) {
-            return false;  // drops this client; the session and other clients go on
-          }
-        },
-        [&service, session](bool) {
-          session->removeStreamClient();
-          service.activeStreams.fetch_sub(1);
-        });
-  });
+  server.Get("/api/sessions", withService(service, listSessions));
+  server.Post("/api/sessions", withService(service, createSession));
+  server.Get("/api/sessions/([^/]+)", withService(service, getSession));
+  server.Delete("/api/sessions/([^/]+)", withService(service, deleteSession));
+  server.Get("/api/sessions/([^/]+)/scene", withService(service, getScene));
+  server.Put("/api/sessions/([^/]+)/scene", withService(service, putScene));
+  server.Patch("/api/sessions/([^/]+)/scene", withService(service, patchScene));
+  server.Get("/api/sessions/([^/]+)/stats", withService(service, getStats));
+  server.Get("/api/sessions/([^/]+)/convergence", withService(service, getConvergence));
+  server.Get("/api/sessions/([^/]+)/frame", withService(service, getFrame));
+  server.Get("/api/sessions/([^/]+)/stream", withService(service, streamFrames));
 }
 
 }  // namespace brdfa::server

@@ -157,14 +157,173 @@ std::string usageText(const char* program) {
          "On start prints one line `listening on http://HOST:PORT` to stdout.\n";
 }
 
-ParseOutcome parse_command_line(int argc, const char* const* argv) {
+namespace {
+
+// What the flags set: the config, and --auth until its default for the host is known.
+struct ParseState {
   ServerConfig config;
+  std::optional<AuthMode> authMode;
+};
+
+// The value of the flag at argv[i] (`--flag value` or `--flag=value`), read as each flag needs.
+// Every reader returns the error message, or nullopt when it stored the value.
+struct FlagReader {
+  int argc;
+  const char* const* argv;
+  int& i;
+  std::string_view name;
+  std::optional<std::string> inlineValue;
+
+  std::optional<std::string> takeValue() {
+    if (inlineValue) return inlineValue;
+    if (i + 1 >= argc) return std::nullopt;
+    return std::string(argv[++i]);
+  }
+  // An integer in lo..hi into `dst` (int or uint64_t).
+  template <class T>
+  std::optional<std::string> takeInt(long long lo, long long hi, T& dst) {
+    auto v = takeValue();
+    if (!v) return std::string(name) + " needs a value";
+    auto n = parseInteger(*v);
+    if (!n || *n < lo || *n > hi)
+      return std::string(name) + " must be an integer in " + std::to_string(lo) + ".." + std::to_string(hi) +
+             ", got '" + *v + "'";
+    dst = static_cast<T>(*n);
+    return std::nullopt;
+  }
+  // A number of seconds in lo..hi, fractions allowed.
+  std::optional<std::string> takeSeconds(double lo, double hi, double& dst) {
+    auto v = takeValue();
+    if (!v) return std::string(name) + " needs a value";
+    char* end = nullptr;
+    const double s = std::strtod(v->c_str(), &end);
+    if (v->empty() || end != v->c_str() + v->size() || !(s >= lo && s <= hi)) {
+      char range[64];
+      std::snprintf(range, sizeof range, "%g..%g", lo, hi);
+      return std::string(name) + " must be a number of seconds in " + range + ", got '" + *v + "'";
+    }
+    dst = s;
+    return std::nullopt;
+  }
+  std::optional<std::string> takeString(std::string& dst) {
+    auto v = takeValue();
+    if (!v || v->empty()) return std::string(name) + " needs a non-empty value";
+    dst = *v;
+    return std::nullopt;
+  }
+};
+
+std::optional<std::string> takeAuthMode(FlagReader& r, ParseState& st) {
+  std::string mode;
+  if (auto err = r.takeString(mode)) return err;
+  if (mode == "none")
+    st.authMode = AuthMode::None;
+  else if (mode == "tokens")
+    st.authMode = AuthMode::Tokens;
+  else if (mode == "proxy")
+    st.authMode = AuthMode::Proxy;
+  else
+    return "--auth must be none, tokens or proxy, got '" + mode + "'";
+  return std::nullopt;
+}
+
+std::optional<std::string> takeRepeated(FlagReader& r, std::vector<std::string>& list) {
+  std::string value;
+  if (auto err = r.takeString(value)) return err;
+  list.push_back(value);
+  return std::nullopt;
+}
+
+// The flags that take a value, each with its reader (usageText documents them).
+using FlagParser = std::optional<std::string> (*)(FlagReader&, ParseState&);
+struct ValueFlag {
+  std::string_view name;
+  FlagParser parse;
+};
+using R = FlagReader;
+using S = ParseState;
+const ValueFlag kValueFlags[] = {
+    {"--port", [](R& r, S& s) { return r.takeInt(0, 65535, s.config.port); }},
+    {"--host", [](R& r, S& s) { return r.takeString(s.config.host); }},
+    {"--root", [](R& r, S& s) { return r.takeString(s.config.root); }},
+    {"--data-dir", [](R& r, S& s) { return r.takeString(s.config.dataDir); }},
+    {"--device", [](R& r, S& s) { return r.takeString(s.config.deviceName); }},
+    {"--threads", [](R& r, S& s) { return r.takeInt(2, 1024, s.config.threads); }},
+    {"--idle-timeout", [](R& r, S& s) { return r.takeInt(1, 24 * 3600, s.config.idleTimeoutSec); }},
+    {"--session-reclaim", [](R& r, S& s) { return r.takeInt(1, 7 * 24 * 3600, s.config.sessionReclaimSec); }},
+    {"--max-upload-bytes", [](R& r, S& s) { return r.takeInt(1, 1ll << 30, s.config.maxUploadBytes); }},
+    {"--max-upload-triangles", [](R& r, S& s) { return r.takeInt(1, 100'000'000, s.config.maxUploadTriangles); }},
+    {"--max-upload-pixels", [](R& r, S& s) { return r.takeInt(1, 1ll << 28, s.config.maxUploadPixels); }},
+    {"--max-assets", [](R& r, S& s) { return r.takeInt(0, 1'000'000, s.config.maxAssets); }},
+    {"--max-assets-bytes", [](R& r, S& s) { return r.takeInt(0, 1ll << 50, s.config.maxAssetsBytes); }},
+    {"--compile-timeout", [](R& r, S& s) { return r.takeInt(1, 600, s.config.compileTimeoutSec); }},
+    {"--compile-memory", [](R& r, S& s) { return r.takeInt(64, 1 << 20, s.config.compileMemoryMiB); }},
+    {"--build-budget", [](R& r, S& s) { return r.takeSeconds(0.1, 3600, s.config.buildBudgetSec); }},
+    {"--pass-budget", [](R& r, S& s) { return r.takeSeconds(0.1, 3600, s.config.passBudgetSec); }},
+    {"--check-budget", [](R& r, S& s) { return r.takeSeconds(0.1, 3600, s.config.checkBudgetSec); }},
+    {"--max-memory", [](R& r, S& s) { return r.takeInt(16, 1ll << 30, s.config.maxMemoryMiB); }},
+    {"--max-connections-per-address",
+     [](R& r, S& s) { return r.takeInt(1, 1'000'000, s.config.maxConnectionsPerAddress); }},
+    {"--request-read-timeout", [](R& r, S& s) { return r.takeInt(1, 3600, s.config.requestReadTimeoutSec); }},
+    {"--replica", [](R& r, S& s) { return r.takeString(s.config.replica); }},
+    {"--drain-seconds", [](R& r, S& s) { return r.takeSeconds(0, 3600, s.config.drainSeconds); }},
+    {"--auth", takeAuthMode},
+    {"--admin-token-file", [](R& r, S& s) { return r.takeString(s.config.auth.adminTokenFile); }},
+    {"--proxy-user-header", [](R& r, S& s) { return r.takeString(s.config.auth.proxyUserHeader); }},
+    {"--proxy-from", [](R& r, S& s) { return takeRepeated(r, s.config.auth.proxyFrom); }},
+    {"--proxy-admin", [](R& r, S& s) { return takeRepeated(r, s.config.auth.proxyAdmins); }},
+    {"--max-sessions", [](R& r, S& s) { return r.takeInt(2, 100000, s.config.maxSessions); }},
+    {"--quota-sessions", [](R& r, S& s) { return r.takeInt(1, 100000, s.config.quotas.sessions); }},
+    {"--quota-brdfs", [](R& r, S& s) { return r.takeInt(1, 1000000, s.config.quotas.brdfs); }},
+    {"--quota-uploads", [](R& r, S& s) { return r.takeInt(0, 1000000, s.config.quotas.uploads); }},
+    {"--quota-upload-bytes", [](R& r, S& s) { return r.takeInt(0, 1ll << 50, s.config.quotas.uploadBytes); }},
+    {"--quota-jobs", [](R& r, S& s) { return r.takeInt(1, 1000, s.config.quotas.jobs); }},
+    {"--quota-renders", [](R& r, S& s) { return r.takeInt(1, 1000, s.config.quotas.renders); }},
+    {"--environment-dir",
+     [](R& r, S& s) {
+       if (!s.config.environmentDirs) s.config.environmentDirs.emplace();
+       return takeRepeated(r, *s.config.environmentDirs);
+     }},
+};
+
+// The flags without a value; false for any other argument.
+bool takeSwitch(std::string_view arg, ServerConfig& config) {
+  if (arg == "--no-cache-load")
+    config.loadCache = false;
+  else if (arg == "--in-process")
+    config.inProcess = true;
+  else if (arg == "--hot-load")
+    config.hotLoad = true;
+  else if (arg == "--allow-unauthenticated")
+    config.auth.allowUnauthenticated = true;
+  else
+    return false;
+  return true;
+}
+
+// Reads the value flag at argv[i] (advancing i past its value); the error message otherwise.
+std::optional<std::string> takeValueFlag(int argc, const char* const* argv, int& i, ParseState& state) {
+  const std::string_view arg = argv[i];
+  FlagReader reader{argc, argv, i, arg, std::nullopt};
+  if (size_t eq = arg.find('='); arg.starts_with("--") && eq != std::string_view::npos) {
+    reader.name = arg.substr(0, eq);
+    reader.inlineValue = std::string(arg.substr(eq + 1));
+  }
+  for (const ValueFlag& flag : kValueFlags)
+    if (flag.name == reader.name) return flag.parse(reader, state);
+  return "unknown option '" + std::string(arg) + "'";
+}
+
+}  // namespace
+
+ParseOutcome parse_command_line(int argc, const char* const* argv) {
+  ParseState state;
+  ServerConfig& config = state.config;
   const char* envRoot = std::getenv("BRDFA_ROOT");
   config.root = (envRoot && *envRoot) ? envRoot : BRDFA_DEFAULT_ROOT;
   const char* envReplica = std::getenv("BRDFA_REPLICA");
   if (envReplica) config.replica = envReplica;
 
-  std::optional<AuthMode> authMode;
   for (int i = 1; i < argc; ++i) {
     std::string_view arg = argv[i];
     if (arg == "--help" || arg == "-h") {
@@ -173,161 +332,15 @@ ParseOutcome parse_command_line(int argc, const char* const* argv) {
       out.message = usageText(argv[0]);
       return out;
     }
-    if (arg == "--no-cache-load") {
-      config.loadCache = false;
-      continue;
-    }
-    if (arg == "--in-process") {
-      config.inProcess = true;
-      continue;
-    }
-    if (arg == "--hot-load") {
-      config.hotLoad = true;
-      continue;
-    }
-    if (arg == "--allow-unauthenticated") {
-      config.auth.allowUnauthenticated = true;
-      continue;
-    }
-    // Accept both `--flag value` and `--flag=value`.
-    std::string_view name = arg;
-    std::optional<std::string> inlineValue;
-    if (size_t eq = arg.find('='); arg.starts_with("--") && eq != std::string_view::npos) {
-      name = arg.substr(0, eq);
-      inlineValue = std::string(arg.substr(eq + 1));
-    }
-    auto takeValue = [&]() -> std::optional<std::string> {
-      if (inlineValue) return inlineValue;
-      if (i + 1 >= argc) return std::nullopt;
-      return std::string(argv[++i]);
-    };
-    // An integer in lo..hi into `dst` (int or uint64_t); the error message otherwise.
-    auto takeInt = [&](long long lo, long long hi, auto& dst) -> std::optional<std::string> {
-      auto v = takeValue();
-      if (!v) return std::string(name) + " needs a value";
-      auto n = parseInteger(*v);
-      if (!n || *n < lo || *n > hi)
-        return std::string(name) + " must be an integer in " + std::to_string(lo) + ".." + std::to_string(hi) +
-               ", got '" + *v + "'";
-      dst = static_cast<std::remove_reference_t<decltype(dst)>>(*n);
-      return std::nullopt;
-    };
-    // A number of seconds in lo..hi, fractions allowed.
-    auto takeSeconds = [&](double lo, double hi, double& dst) -> std::optional<std::string> {
-      auto v = takeValue();
-      if (!v) return std::string(name) + " needs a value";
-      char* end = nullptr;
-      const double s = std::strtod(v->c_str(), &end);
-      if (v->empty() || end != v->c_str() + v->size() || !(s >= lo && s <= hi))
-      {
-        char range[64];
-        std::snprintf(range, sizeof range, "%g..%g", lo, hi);
-        return std::string(name) + " must be a number of seconds in " + range + ", got '" + *v + "'";
-      }
-      dst = s;
-      return std::nullopt;
-    };
-    auto takeString = [&](std::string& dst) -> std::optional<std::string> {
-      auto v = takeValue();
-      if (!v || v->empty()) return std::string(name) + " needs a non-empty value";
-      dst = *v;
-      return std::nullopt;
-    };
-
-    std::optional<std::string> err;
-    if (name == "--port")
-      err = takeInt(0, 65535, config.port);
-    else if (name == "--host")
-      err = takeString(config.host);
-    else if (name == "--root")
-      err = takeString(config.root);
-    else if (name == "--data-dir")
-      err = takeString(config.dataDir);
-    else if (name == "--device")
-      err = takeString(config.deviceName);
-    else if (name == "--threads")
-      err = takeInt(2, 1024, config.threads);
-    else if (name == "--idle-timeout")
-      err = takeInt(1, 24 * 3600, config.idleTimeoutSec);
-    else if (name == "--session-reclaim")
-      err = takeInt(1, 7 * 24 * 3600, config.sessionReclaimSec);
-    else if (name == "--max-upload-bytes")
-      err = takeInt(1, 1ll << 30, config.maxUploadBytes);
-    else if (name == "--max-upload-triangles")
-      err = takeInt(1, 100'000'000, config.maxUploadTriangles);
-    else if (name == "--max-upload-pixels")
-      err = takeInt(1, 1ll << 28, config.maxUploadPixels);
-    else if (name == "--max-assets")
-      err = takeInt(0, 1'000'000, config.maxAssets);
-    else if (name == "--max-assets-bytes")
-      err = takeInt(0, 1ll << 50, config.maxAssetsBytes);
-    else if (name == "--compile-timeout")
-      err = takeInt(1, 600, config.compileTimeoutSec);
-    else if (name == "--compile-memory")
-      err = takeInt(64, 1 << 20, config.compileMemoryMiB);
-    else if (name == "--build-budget")
-      err = takeSeconds(0.1, 3600, config.buildBudgetSec);
-    else if (name == "--pass-budget")
-      err = takeSeconds(0.1, 3600, config.passBudgetSec);
-    else if (name == "--check-budget")
-      err = takeSeconds(0.1, 3600, config.checkBudgetSec);
-    else if (name == "--max-memory")
-      err = takeInt(16, 1ll << 30, config.maxMemoryMiB);
-    else if (name == "--max-connections-per-address")
-      err = takeInt(1, 1'000'000, config.maxConnectionsPerAddress);
-    else if (name == "--request-read-timeout")
-      err = takeInt(1, 3600, config.requestReadTimeoutSec);
-    else if (name == "--replica")
-      err = takeString(config.replica);
-    else if (name == "--drain-seconds")
-      err = takeSeconds(0, 3600, config.drainSeconds);
-    else if (name == "--auth") {
-      std::string mode;
-      err = takeString(mode);
-      if (!err) {
-        if (mode == "none") authMode = AuthMode::None;
-        else if (mode == "tokens") authMode = AuthMode::Tokens;
-        else if (mode == "proxy") authMode = AuthMode::Proxy;
-        else err = "--auth must be none, tokens or proxy, got '" + mode + "'";
-      }
-    } else if (name == "--admin-token-file")
-      err = takeString(config.auth.adminTokenFile);
-    else if (name == "--proxy-user-header")
-      err = takeString(config.auth.proxyUserHeader);
-    else if (name == "--proxy-from" || name == "--proxy-admin") {
-      std::string value;
-      err = takeString(value);
-      if (!err) (name == "--proxy-from" ? config.auth.proxyFrom : config.auth.proxyAdmins).push_back(value);
-    } else if (name == "--max-sessions")
-      err = takeInt(2, 100000, config.maxSessions);
-    else if (name == "--quota-sessions")
-      err = takeInt(1, 100000, config.quotas.sessions);
-    else if (name == "--quota-brdfs")
-      err = takeInt(1, 1000000, config.quotas.brdfs);
-    else if (name == "--quota-uploads")
-      err = takeInt(0, 1000000, config.quotas.uploads);
-    else if (name == "--quota-upload-bytes")
-      err = takeInt(0, 1ll << 50, config.quotas.uploadBytes);
-    else if (name == "--quota-jobs")
-      err = takeInt(1, 1000, config.quotas.jobs);
-    else if (name == "--quota-renders")
-      err = takeInt(1, 1000, config.quotas.renders);
-    else if (name == "--environment-dir") {
-      std::string dir;
-      err = takeString(dir);
-      if (!err) {
-        if (!config.environmentDirs) config.environmentDirs.emplace();
-        config.environmentDirs->push_back(dir);
-      }
-    }
-    else
-      err = "unknown option '" + std::string(arg) + "'";
-    if (err) return fail(*err + "\n" + usageText(argv[0]));
+    if (takeSwitch(arg, config)) continue;
+    if (std::optional<std::string> err = takeValueFlag(argc, argv, i, state))
+      return fail(*err + "\n" + usageText(argv[0]));
   }
   if (!config.replica.empty() && !isValidReplicaTag(config.replica))
     return fail("--replica (or $BRDFA_REPLICA) must be 1-63 of [a-z0-9-], starting and ending with a letter or "
                 "digit, got '" + config.replica + "'\n" + usageText(argv[0]));
-  if (std::optional<std::string> err = resolveAuth(config, authMode)) return fail(*err + "\n" + usageText(argv[0]));
+  if (std::optional<std::string> err = resolveAuth(config, state.authMode))
+    return fail(*err + "\n" + usageText(argv[0]));
   ParseOutcome out;
   out.config = config;
   return out;

@@ -128,109 +128,123 @@ std::optional<double> trueRelError(const std::vector<float>& rgba, const std::ve
   return e;
 }
 
-Result<json> runConvergenceJob(Renderer& renderer, const ConvergenceJobSpec& spec, JobContext& context) {
+namespace {
+
+// The scene every timed view starts from: no visible environment, no stopping rule, and small
+// enough passes that checkpoints are met closely.
+Scene convergenceBaseScene(const ConvergenceJobSpec& spec) {
   Scene base = spec.scene;
   base.environment.visible = false;
   base.render.maxSamples = kMaxTotalSamples;
   base.render.targetError = 0;
   const int pixels = base.render.width * base.render.height;
   base.render.samplesPerFrame = std::clamp(kConvergenceSamplesPerPass / std::max(pixels, 1), 1, base.render.samplesPerFrame);
-  auto sceneFor = [&](SamplingMode mode) {
-    Scene s = base;
-    s.render.sampling = mode;
-    return s;
-  };
-  const double budget = static_cast<double>(spec.referenceMs) + static_cast<double>(spec.timeMs) * spec.modes.size();
-  double spent = 0;  // render ms of finished phases, for progress
+  return base;
+}
 
-  // Warm-up: build (and JIT) every program on a tiny view, so no timed pass pays for it.
-  {
-    Result<std::unique_ptr<RenderView>> warm = renderer.createView();
-    if (!warm) return warm.takeError();
-    std::vector<SamplingMode> all = spec.modes;
-    if (std::find(all.begin(), all.end(), SamplingMode::Mis) == all.end()) all.push_back(SamplingMode::Mis);
-    for (SamplingMode mode : all) {
-      if (context.cancelled()) return cancelledError();
-      Scene s = sceneFor(mode);
-      s.render.width = s.render.height = kMinImageSize;
-      s.render.samplesPerFrame = 1;
-      if (Result<void> set = warm.value()->setScene(s); !set) return set.takeError();
-      if (Result<FrameStats> pass = warm.value()->renderPass(); !pass) return pass.takeError();
-    }
+Scene withSampling(const Scene& base, SamplingMode mode) {
+  Scene s = base;
+  s.render.sampling = mode;
+  return s;
+}
+
+// Warm-up: build (and JIT) every program on a tiny view, so no timed pass pays for it.
+Result<void> warmUpPrograms(Renderer& renderer, const ConvergenceJobSpec& spec, const Scene& base,
+                            JobContext& context) {
+  Result<std::unique_ptr<RenderView>> warm = renderer.createView();
+  if (!warm) return warm.takeError();
+  std::vector<SamplingMode> all = spec.modes;
+  if (std::find(all.begin(), all.end(), SamplingMode::Mis) == all.end()) all.push_back(SamplingMode::Mis);
+  for (SamplingMode mode : all) {
+    if (context.cancelled()) return cancelledError();
+    Scene s = withSampling(base, mode);
+    s.render.width = s.render.height = kMinImageSize;
+    s.render.samplesPerFrame = 1;
+    BRDFA_TRY(warm.value()->setScene(s));
+    BRDFA_TRY(warm.value()->renderPass());
   }
+  return {};
+}
 
-  // The shared reference, in "mis", with a seed of its own: the "mis" run below must share no
-  // sample with it, or its error against the reference would read too small.
-  Frame reference;
-  {
-    Result<std::unique_ptr<RenderView>> view = renderer.createView();
-    if (!view) return view.takeError();
-    RenderView& v = *view.value();
-    Scene referenceScene = sceneFor(SamplingMode::Mis);
-    referenceScene.render.seed ^= 0x9e3779b9u;
-    if (Result<void> set = v.setScene(referenceScene); !set) return set.takeError();
-    for (;;) {
-      if (context.cancelled()) return cancelledError();
-      Result<FrameStats> pass = v.renderPass();
-      if (!pass) return pass.takeError();
-      context.setProgress(std::min(pass->elapsedMs, double(spec.referenceMs)) / budget);
-      if (pass->elapsedMs >= spec.referenceMs || pass->done()) break;
-    }
-    Result<Frame> frame = v.readFrame(true);
-    if (!frame) return frame.takeError();
-    reference = std::move(frame.value());
+// The shared reference, in "mis", with a seed of its own: the "mis" run must share no sample
+// with it, or its error against the reference would read too small.
+Result<Frame> renderReference(Renderer& renderer, const ConvergenceJobSpec& spec, const Scene& base, double budget,
+                              JobContext& context) {
+  Result<std::unique_ptr<RenderView>> view = renderer.createView();
+  if (!view) return view.takeError();
+  RenderView& v = *view.value();
+  Scene referenceScene = withSampling(base, SamplingMode::Mis);
+  referenceScene.render.seed ^= 0x9e3779b9u;
+  BRDFA_TRY(v.setScene(referenceScene));
+  for (;;) {
+    if (context.cancelled()) return cancelledError();
+    Result<FrameStats> pass = v.renderPass();
+    if (!pass) return pass.takeError();
+    context.setProgress(std::min(pass->elapsedMs, double(spec.referenceMs)) / budget);
+    if (pass->elapsedMs >= spec.referenceMs || pass->done()) break;
   }
-  spent = spec.referenceMs;
-  const double refRelError = reference.stats.relError.value_or(0.0);
-  double refMeanLum = 0;
-  size_t refPixels = 0;
-  trueRelError(reference.rgba32f, reference.rgba32f, 0, &refMeanLum, &refPixels);
+  return v.readFrame(true);
+}
 
-  struct Run {
-    SamplingMode mode;
-    std::unique_ptr<RenderView> view;
-    FrameStats stats;
-    bool done = false;
-    json curve = json::array();
-    json last;  // the latest checkpoint
-  };
+// One timed view per compared mode.
+struct Run {
+  SamplingMode mode;
+  std::unique_ptr<RenderView> view;
+  FrameStats stats;
+  bool done = false;
+  json curve = json::array();
+  json last;  // the latest checkpoint
+};
+
+Result<std::vector<Run>> startRuns(Renderer& renderer, const ConvergenceJobSpec& spec, const Scene& base) {
   std::vector<Run> runs;
   for (SamplingMode mode : spec.modes) {
     Result<std::unique_ptr<RenderView>> view = renderer.createView();
     if (!view) return view.takeError();
-    if (Result<void> set = view.value()->setScene(sceneFor(mode)); !set) return set.takeError();
+    BRDFA_TRY(view.value()->setScene(withSampling(base, mode)));
     Run run{mode, std::move(view.value()), {}, false, json::array(), nullptr};
     run.stats = run.view->stats();
     runs.push_back(std::move(run));
   }
+  return runs;
+}
 
-  // Checkpoints evenly spaced in log-time over [time_ms / 64, time_ms].
+// Checkpoints evenly spaced in log-time over [time_ms / 64, time_ms].
+std::vector<double> checkpointTimes(const ConvergenceJobSpec& spec) {
   std::vector<double> checkpoints(kConvergenceCheckpoints);
   for (int k = 0; k < kConvergenceCheckpoints; ++k)
     checkpoints[k] = spec.timeMs * std::pow(64.0, double(k - (kConvergenceCheckpoints - 1)) / (kConvergenceCheckpoints - 1));
   checkpoints.back() = spec.timeMs;
+  return checkpoints;
+}
 
-  auto record = [&]() -> Result<void> {
-    for (Run& run : runs) {
-      Result<Frame> frame = run.view->readFrame(true);
-      if (!frame) return frame.takeError();
-      const FrameStats& st = frame->stats;
-      double raw = 0;
-      std::optional<double> truth = trueRelError(frame->rgba32f, reference.rgba32f, refRelError, nullptr, nullptr, &raw);
-      json point{{"elapsed_ms", st.elapsedMs},
-                 {"spp", st.spp},
-                 {"passes", st.passes},
-                 {"rel_error", optionalNumber(st.relError)},
-                 {"true_rel_error", optionalNumber(truth)},
-                 {"raw_rel_error", truth ? json(raw) : json(nullptr)}};
-      run.stats = st;
-      // Several checkpoints passed by one long pass give one point.
-      if (run.curve.empty() || run.curve.back()["spp"] != st.spp) run.curve.push_back(point);
-      run.last = point;
-    }
-    return {};
-  };
+// Reads every run's frame and adds its point against the reference.
+Result<void> recordCheckpoint(std::vector<Run>& runs, const Frame& reference, double refRelError) {
+  for (Run& run : runs) {
+    Result<Frame> frame = run.view->readFrame(true);
+    if (!frame) return frame.takeError();
+    const FrameStats& st = frame->stats;
+    double raw = 0;
+    std::optional<double> truth = trueRelError(frame->rgba32f, reference.rgba32f, refRelError, nullptr, nullptr, &raw);
+    json point{{"elapsed_ms", st.elapsedMs},
+               {"spp", st.spp},
+               {"passes", st.passes},
+               {"rel_error", optionalNumber(st.relError)},
+               {"true_rel_error", optionalNumber(truth)},
+               {"raw_rel_error", truth ? json(raw) : json(nullptr)}};
+    run.stats = st;
+    // Several checkpoints passed by one long pass give one point.
+    if (run.curve.empty() || run.curve.back()["spp"] != st.spp) run.curve.push_back(point);
+    run.last = point;
+  }
+  return {};
+}
 
+// Renders the slowest unfinished run one pass at a time, recording every checkpoint all runs
+// have passed, until the last checkpoint.
+Result<void> runToCheckpoints(std::vector<Run>& runs, const std::vector<double>& checkpoints,
+                              const ConvergenceJobSpec& spec, const Frame& reference, double refRelError, double spent,
+                              double budget, JobContext& context) {
   size_t next = 0;
   while (next < checkpoints.size()) {
     if (context.cancelled()) return cancelledError();
@@ -243,7 +257,7 @@ Result<json> runConvergenceJob(Renderer& renderer, const ConvergenceJobSpec& spe
       if (!run.done) reached = std::min(reached, run.stats.elapsedMs);
     if (!slowest || reached >= checkpoints[next]) {
       while (next < checkpoints.size() && (!slowest || reached >= checkpoints[next])) ++next;
-      if (Result<void> r = record(); !r) return r.takeError();
+      BRDFA_TRY(recordCheckpoint(runs, reference, refRelError));
       continue;
     }
     Result<FrameStats> pass = slowest->view->renderPass();
@@ -254,8 +268,18 @@ Result<json> runConvergenceJob(Renderer& renderer, const ConvergenceJobSpec& spe
     for (const Run& run : runs) progress += std::min(run.stats.elapsedMs, double(spec.timeMs));
     context.setProgress(std::min(0.99, progress / budget));
   }
+  return {};
+}
 
-  // Equal-time comparison at the last checkpoint.
+// Equal-time comparison at the last checkpoint: each mode's entry, its relMSE against the
+// cosine run's, and the best mode.
+struct Comparison {
+  json modes = json::array();
+  json ratios;
+  json best;
+};
+
+Comparison compareRuns(const std::vector<Run>& runs) {
   auto relmse = [](const json& point) -> std::optional<double> {
     if (!point.is_object() || !point["true_rel_error"].is_number()) return std::nullopt;
     const double e = point["true_rel_error"].get<double>();
@@ -265,9 +289,9 @@ Result<json> runConvergenceJob(Renderer& renderer, const ConvergenceJobSpec& spe
   for (const Run& run : runs)
     if (run.mode == SamplingMode::Cosine) cosineMse = relmse(run.last);
   const bool haveCosine = std::any_of(runs.begin(), runs.end(), [](const Run& r) { return r.mode == SamplingMode::Cosine; });
-  json modes = json::array();
-  json ratios = haveCosine ? json::object() : json(nullptr);
-  json best = nullptr;
+  Comparison out;
+  out.ratios = haveCosine ? json::object() : json(nullptr);
+  out.best = nullptr;
   double bestMse = std::numeric_limits<double>::infinity();
   for (const Run& run : runs) {
     const char* name = samplingModeName(run.mode);
@@ -276,18 +300,43 @@ Result<json> runConvergenceJob(Renderer& renderer, const ConvergenceJobSpec& spe
     if (final.is_object()) final["relmse"] = optionalNumber(mse);
     json ratio = nullptr;
     if (cosineMse && mse && *mse > 0) ratio = *cosineMse / *mse;
-    if (haveCosine) ratios[name] = ratio;
+    if (haveCosine) out.ratios[name] = ratio;
     if (mse && *mse < bestMse) {
       bestMse = *mse;
-      best = name;
+      out.best = name;
     }
-    modes.push_back({{"sampling", name},
-                     {"estimator", run.stats.estimator},
-                     {"warnings", run.stats.warnings},
-                     {"curve", run.curve},
-                     {"final", final},
-                     {"equal_time_relmse_vs_cosine", ratio}});
+    out.modes.push_back({{"sampling", name},
+                         {"estimator", run.stats.estimator},
+                         {"warnings", run.stats.warnings},
+                         {"curve", run.curve},
+                         {"final", final},
+                         {"equal_time_relmse_vs_cosine", ratio}});
   }
+  return out;
+}
+
+}  // namespace
+
+Result<json> runConvergenceJob(Renderer& renderer, const ConvergenceJobSpec& spec, JobContext& context) {
+  const Scene base = convergenceBaseScene(spec);
+  const double budget = static_cast<double>(spec.referenceMs) + static_cast<double>(spec.timeMs) * spec.modes.size();
+  BRDFA_TRY(warmUpPrograms(renderer, spec, base, context));
+  Result<Frame> referenceFrame = renderReference(renderer, spec, base, budget, context);
+  if (!referenceFrame) return referenceFrame.takeError();
+  const Frame reference = std::move(referenceFrame.value());
+  const double spent = spec.referenceMs;  // render ms of finished phases, for progress
+  const double refRelError = reference.stats.relError.value_or(0.0);
+  double refMeanLum = 0;
+  size_t refPixels = 0;
+  trueRelError(reference.rgba32f, reference.rgba32f, 0, &refMeanLum, &refPixels);
+
+  Result<std::vector<Run>> started = startRuns(renderer, spec, base);
+  if (!started) return started.takeError();
+  std::vector<Run> runs = std::move(started.value());
+  const std::vector<double> checkpoints = checkpointTimes(spec);
+  BRDFA_TRY(runToCheckpoints(runs, checkpoints, spec, reference, refRelError, spent, budget, context));
+
+  Comparison comparison = compareRuns(runs);
   return json{{"time_ms", spec.timeMs},
               {"reference_ms", spec.referenceMs},
               {"width", base.render.width},
@@ -301,9 +350,9 @@ Result<json> runConvergenceJob(Renderer& renderer, const ConvergenceJobSpec& spe
                 {"rel_error", optionalNumber(reference.stats.relError)},
                 {"mean_luminance", refMeanLum},
                 {"pixels", refPixels}}},
-              {"modes", modes},
-              {"equal_time_relmse_vs_cosine", ratios},
-              {"best", best}};
+              {"modes", comparison.modes},
+              {"equal_time_relmse_vs_cosine", comparison.ratios},
+              {"best", comparison.best}};
 }
 
 }  // namespace brdfa::server

@@ -400,86 +400,138 @@ std::string AssetStore::newId(AssetKind kind) const {
   }
 }
 
-Result<AssetRecord> AssetStore::add(const AssetUpload& up, AssetRejection& rejection, const AssetOwner& owner,
-                                    AssetQuotaHit* quotaHit) {
-  auto refuse = [&](AssetRejection why, std::string message, std::string field = "file") {
-    rejection = why;
-    return makeError(ErrorCode::InvalidArgument, std::move(message), std::move(field));
-  };
-  rejection = AssetRejection::None;
+namespace {
 
-  // Cheap checks first: size, then what the content is against what the request says it is.
-  if (up.size == 0) return refuse(AssetRejection::Empty, "the uploaded file is empty");
-  if (up.size > limits_.file.maxBytes)
-    return refuse(AssetRejection::TooLarge, "the file is " + std::to_string(up.size) +
-                                                " bytes; uploads are limited to " +
-                                                std::to_string(limits_.file.maxBytes) + " bytes (--max-upload-bytes)");
+// An upload refused before anything was stored: `why` into `rejection`, the Error returned.
+Error refuseUpload(AssetRejection& rejection, AssetRejection why, std::string message, std::string field = "file") {
+  rejection = why;
+  return makeError(ErrorCode::InvalidArgument, std::move(message), std::move(field));
+}
+
+// What an upload's content is, once it agrees with everything the request says about it.
+struct UploadClaims {
+  AssetKind kind;
+  AssetFormat format;
+  std::string displayName;
+};
+
+// The cheap checks: size, then what the content is against what the request says it is.
+Result<UploadClaims> checkUploadClaims(const AssetUpload& up, uint64_t maxBytes, AssetRejection& rejection) {
+  if (up.size == 0) return refuseUpload(rejection, AssetRejection::Empty, "the uploaded file is empty");
+  if (up.size > maxBytes)
+    return refuseUpload(rejection, AssetRejection::TooLarge,
+                        "the file is " + std::to_string(up.size) + " bytes; uploads are limited to " +
+                            std::to_string(maxBytes) + " bytes (--max-upload-bytes)");
   std::optional<AssetKind> requested;
   if (!up.kind.empty()) {
     AssetKind k;
     if (!assetKindFromName(up.kind, k))
-      return refuse(AssetRejection::BadKind, "kind must be mesh, texture or environment, got '" +
-                                                 up.kind.substr(0, 64) + "'",
-                    "kind");
+      return refuseUpload(rejection, AssetRejection::BadKind,
+                          "kind must be mesh, texture or environment, got '" + up.kind.substr(0, 64) + "'", "kind");
     requested = k;
   }
   std::optional<AssetFormat> format = sniffAssetFormat(up.bytes);
   if (!format)
-    return refuse(AssetRejection::UnknownFormat,
-                  "the file's content is none of OBJ, PNG, JPEG, Radiance HDR or OpenEXR");
+    return refuseUpload(rejection, AssetRejection::UnknownFormat,
+                        "the file's content is none of OBJ, PNG, JPEG, Radiance HDR or OpenEXR");
   const AssetKind kind = requested.value_or(defaultKind(*format));
   if (!kindAccepts(kind, *format))
-    return refuse(AssetRejection::Mislabelled,
-                  std::string("kind '") + assetKindName(kind) + "' cannot be " + formatTitle(*format) +
-                      " content (mesh: OBJ; texture: PNG or JPEG; environment: HDR, EXR, or a PNG/JPEG cross)",
-                  "kind");
-  const std::string displayName = sanitizeUploadFileName(up.fileName);
+    return refuseUpload(rejection, AssetRejection::Mislabelled,
+                        std::string("kind '") + assetKindName(kind) + "' cannot be " + formatTitle(*format) +
+                            " content (mesh: OBJ; texture: PNG or JPEG; environment: HDR, EXR, or a PNG/JPEG cross)",
+                        "kind");
+  std::string displayName = sanitizeUploadFileName(up.fileName);
   if (auto named = formatFromExtension(displayName); named && *named != *format)
-    return refuse(AssetRejection::Mislabelled, "the file name '" + displayName + "' says " + formatTitle(*named) +
-                                                   " but the content is " + formatTitle(*format));
+    return refuseUpload(rejection, AssetRejection::Mislabelled,
+                        "the file name '" + displayName + "' says " + formatTitle(*named) + " but the content is " +
+                            formatTitle(*format));
   if (TypeClaim claim = claimOfContentType(up.contentType); claim.claims && claim.format != format)
-    return refuse(AssetRejection::Mislabelled, "the part's Content-Type '" + up.contentType.substr(0, 128) +
-                                                   "' contradicts its content (" + formatTitle(*format) + ")");
+    return refuseUpload(rejection, AssetRejection::Mislabelled,
+                        "the part's Content-Type '" + up.contentType.substr(0, 128) + "' contradicts its content (" +
+                            formatTitle(*format) + ")");
+  return UploadClaims{kind, *format, std::move(displayName)};
+}
 
-  // Under mutex_: the uploader's quota, then the server's caps, counting uploads being written
-  // (the uploader's own in-flight ones count as kept: `reservedBy`).
-  std::map<std::string, std::pair<size_t, uint64_t>>& inFlight = reservedBy_;
-  auto overQuota = [&]() -> std::optional<Error> {
-    if (owner.maxUploads == 0 && owner.maxBytes == 0) return std::nullopt;
-    size_t count = inFlight[owner.user].first;
-    uint64_t bytes = inFlight[owner.user].second;
+}  // namespace
+
+std::optional<Error> AssetStore::refuseWithoutRoom(const AssetUpload& up, const AssetOwner& owner,
+                                                   AssetRejection& rejection, AssetQuotaHit* quotaHit) {
+  if (owner.maxUploads > 0 || owner.maxBytes > 0) {
+    size_t count = reservedBy_[owner.user].first;
+    uint64_t bytes = reservedBy_[owner.user].second;
     for (const auto& [id, r] : uploads_)
       if (r.owner == owner.user) ++count, bytes += r.bytes;
     AssetQuotaHit hit;
+    bool over = true;
     if (owner.maxUploads > 0 && count >= owner.maxUploads) hit = {"uploads", owner.maxUploads, count};
     else if (owner.maxBytes > 0 && bytes + up.size > owner.maxBytes) hit = {"upload_bytes", owner.maxBytes, bytes};
-    else return std::nullopt;
-    if (quotaHit) *quotaHit = hit;
-    return refuse(AssetRejection::QuotaExceeded, hit.quota == "uploads"
-                                                     ? "you keep " + std::to_string(count) + " uploads, the most one person may"
-                                                     : "your uploads hold " + std::to_string(bytes) + " bytes; with this file's " +
-                                                           std::to_string(up.size) + " they would pass your " +
-                                                           std::to_string(owner.maxBytes) + "-byte quota");
-  };
-  auto storageFull = [&]() -> std::optional<Error> {
-    if (auto quota = overQuota()) return quota;
-    if (uploads_.size() + reserved_ >= limits_.maxAssets)
-      return refuse(AssetRejection::StorageFull, "the server keeps at most " + std::to_string(limits_.maxAssets) +
-                                                     " uploads (--max-assets); none can be added");
-    const uint64_t used = storedBytes_ + reservedBytes_;
-    if (used + up.size > limits_.maxTotalBytes)
-      return refuse(AssetRejection::StorageFull,
-                    "stored uploads would exceed " + std::to_string(limits_.maxTotalBytes) +
-                        " bytes (--max-assets-bytes); " +
-                        std::to_string(limits_.maxTotalBytes - std::min(limits_.maxTotalBytes, used)) +
-                        " bytes are left, the file has " + std::to_string(up.size));
-    return std::nullopt;
-  };
-  // Other replicas' uploads count against the same quotas and caps: the folder is shared.
+    else
+      over = false;
+    if (over) {
+      if (quotaHit) *quotaHit = hit;
+      return refuseUpload(rejection, AssetRejection::QuotaExceeded,
+                          hit.quota == "uploads"
+                              ? "you keep " + std::to_string(count) + " uploads, the most one person may"
+                              : "your uploads hold " + std::to_string(bytes) + " bytes; with this file's " +
+                                    std::to_string(up.size) + " they would pass your " +
+                                    std::to_string(owner.maxBytes) + "-byte quota");
+    }
+  }
+  if (uploads_.size() + reserved_ >= limits_.maxAssets)
+    return refuseUpload(
+        rejection, AssetRejection::StorageFull,
+        "the server keeps at most " + std::to_string(limits_.maxAssets) + " uploads (--max-assets); none can be added");
+  const uint64_t used = storedBytes_ + reservedBytes_;
+  if (used + up.size > limits_.maxTotalBytes)
+    return refuseUpload(rejection, AssetRejection::StorageFull,
+                        "stored uploads would exceed " + std::to_string(limits_.maxTotalBytes) +
+                            " bytes (--max-assets-bytes); " +
+                            std::to_string(limits_.maxTotalBytes - std::min(limits_.maxTotalBytes, used)) +
+                            " bytes are left, the file has " + std::to_string(up.size));
+  return std::nullopt;
+}
+
+Result<void> AssetStore::storeReserved(const AssetRecord& rec, const AssetUpload& up, const AssetOwner& owner) {
+  // The data file first, then the metadata: a metadata file always names a complete file.
+  const fs::path data = fs::path(dir_) / (rec.id + "." + storedExtension(*rec.format));
+  const fs::path meta = fs::path(dir_) / (rec.id + ".json");
+  Result<void> written = writeFileAtomically(data, up.bytes);
+  if (written)
+    written = writeFileAtomically(meta, assetToJson(rec).dump(2, ' ', false, json::error_handler_t::replace) + "\n");
+  if (written) written = renderer_->registerAsset(rec.id, rec.kind, data.string());
+
+  std::lock_guard lock(mutex_);
+  writing_.erase(rec.id);
+  --reserved_;
+  reservedBytes_ -= up.size;
+  if (auto it = reservedBy_.find(owner.user); it != reservedBy_.end() && --it->second.first == 0)
+    reservedBy_.erase(it);
+  else if (it != reservedBy_.end())
+    it->second.second -= up.size;
+  if (!written) {
+    (void)removeFileDurably(meta);
+    (void)removeFileDurably(data);
+    return written;
+  }
+  storedBytes_ += rec.bytes;
+  uploads_[rec.id] = rec;
+  return {};
+}
+
+Result<AssetRecord> AssetStore::add(const AssetUpload& up, AssetRejection& rejection, const AssetOwner& owner,
+                                    AssetQuotaHit* quotaHit) {
+  rejection = AssetRejection::None;
+  Result<UploadClaims> claims = checkUploadClaims(up, limits_.file.maxBytes, rejection);
+  if (!claims) return claims.takeError();
+  const AssetKind kind = claims->kind;
+
+  // Under mutex_: the uploader's quota, then the server's caps, counting uploads being written
+  // (the uploader's own in-flight ones count as kept: `reservedBy_`). Other replicas' uploads
+  // count against the same quotas and caps: the folder is shared.
   refreshFromDisk();
   {
     std::lock_guard lock(mutex_);
-    if (auto full = storageFull()) return *full;
+    if (auto full = refuseWithoutRoom(up, owner, rejection, quotaHit)) return *full;
   }
 
   // Decoding a large image takes memory and time: a few at once.
@@ -501,7 +553,7 @@ Result<AssetRecord> AssetStore::add(const AssetUpload& up, AssetRejection& rejec
   rec.source = kSourceUpload;
   rec.format = info->format;
   rec.layout = info->layout;
-  rec.name = displayName;
+  rec.name = claims->displayName;
   rec.bytes = up.size;
   rec.vertices = info->vertices;
   rec.triangles = info->triangles;
@@ -512,37 +564,18 @@ Result<AssetRecord> AssetStore::add(const AssetUpload& up, AssetRejection& rejec
   refreshFromDisk();  // the check took a while: look at the folder again before reserving
   {
     std::lock_guard lock(mutex_);
-    if (auto full = storageFull()) return *full;
+    if (auto full = refuseWithoutRoom(up, owner, rejection, quotaHit)) return *full;
     rec.id = newId(kind);
     writing_.insert(rec.id);
     ++reserved_;
     reservedBytes_ += up.size;
-    ++inFlight[owner.user].first;
-    inFlight[owner.user].second += up.size;
+    ++reservedBy_[owner.user].first;
+    reservedBy_[owner.user].second += up.size;
   }
-
-  // The data file first, then the metadata: a metadata file always names a complete file.
-  const fs::path data = fs::path(dir_) / (rec.id + "." + storedExtension(*rec.format));
-  const fs::path meta = fs::path(dir_) / (rec.id + ".json");
-  Result<void> written = writeFileAtomically(data, up.bytes);
-  if (written)
-    written = writeFileAtomically(meta, assetToJson(rec).dump(2, ' ', false, json::error_handler_t::replace) + "\n");
-  if (written) written = renderer_->registerAsset(rec.id, rec.kind, data.string());
-
-  std::lock_guard lock(mutex_);
-  writing_.erase(rec.id);
-  --reserved_;
-  reservedBytes_ -= up.size;
-  if (auto it = inFlight.find(owner.user); it != inFlight.end() && --it->second.first == 0) inFlight.erase(it);
-  else if (it != inFlight.end()) it->second.second -= up.size;
-  if (!written) {
-    (void)removeFileDurably(meta);
-    (void)removeFileDurably(data);
+  if (Result<void> stored = storeReserved(rec, up, owner); !stored) {
     rejection = AssetRejection::StorageError;
-    return makeError(ErrorCode::Internal, "could not store the upload: " + written.error().message);
+    return makeError(ErrorCode::Internal, "could not store the upload: " + stored.error().message);
   }
-  storedBytes_ += rec.bytes;
-  uploads_[rec.id] = rec;
   return rec;
 }
 

@@ -135,6 +135,13 @@ class AssetStore {
   std::string loadOne(const std::string& id);  // "" on success, else why it was skipped
   void loadEnvironmentDir(const std::string& dir, std::vector<std::string>& log);
   std::string newId(AssetKind kind) const;     // under mutex_
+  // Under mutex_: the Error (and rejection) when the owner's quota or the server's caps leave no
+  // room for `up`, counting uploads being written.
+  std::optional<Error> refuseWithoutRoom(const AssetUpload& up, const AssetOwner& owner, AssetRejection& rejection,
+                                         AssetQuotaHit* quotaHit);
+  // Writes a reserved upload's files and registers it, then releases the reservation; on failure
+  // nothing of it stays.
+  Result<void> storeReserved(const AssetRecord& rec, const AssetUpload& up, const AssetOwner& owner);
 
   std::shared_ptr<Renderer> renderer_;
   std::string dir_;
