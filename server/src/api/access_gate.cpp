@@ -74,9 +74,8 @@ bool isPublic(const httplib::Request& req) {
 
 // Refused before its body was read: the connection closes after the answer, else the unread body
 // (a cross-site form can make it a whole request) would be read as the next request.
-httplib::Server::HandlerResponse refuse(httplib::Response& res, int status, const std::string& code,
-                                        const std::string& message) {
-  sendError(res, status, code, message);
+httplib::Server::HandlerResponse refuse(httplib::Response& res, ErrorCode code, const std::string& message) {
+  sendError(res, code, message);
   res.set_header("Connection", "close");
   closeAfterThisResponse();
   return httplib::Server::HandlerResponse::Handled;
@@ -91,17 +90,17 @@ void registerAccessGate(httplib::Server& server, Service& service) {
     if (isStateChanging(req.method)) {
       // A cross-site form or fetch can change nothing, whatever it carries.
       if (fromAnotherSite(req))
-        return refuse(res, 403, "cross_site", "state-changing requests from a page of another site are refused");
+        return refuse(res, ErrorCode::CrossSite, "state-changing requests from a page of another site are refused");
       // proxy mode: the front's sign-on cookie is ambient, so a request must also carry a header
       // that no cross-site form can set.
       if (service.auth->mode() == AuthMode::Proxy && !req.has_header("X-Brdfa-Client"))
-        return refuse(res, 403, "cross_site",
+        return refuse(res, ErrorCode::CrossSite,
                       "state-changing requests need the header X-Brdfa-Client (any value) behind a sign-on proxy");
     }
     tCurrent.identity = service.auth->identify(req);
     if (!tCurrent.identity && !isPublic(req)) {
       res.set_header("WWW-Authenticate", "Bearer realm=\"brdfa\"");
-      return refuse(res, 401, "unauthorized",
+      return refuse(res, ErrorCode::Unauthorized,
                     service.auth->mode() == AuthMode::Proxy
                         ? "no signed-in user: sign in through the site's front"
                         : "send your token as 'Authorization: Bearer <token>' (from a join link, or from the teacher)");
@@ -125,7 +124,7 @@ bool hasViewKey(const httplib::Request& req, const Session& session) {
 
 bool requireTeacher(const httplib::Request& req, httplib::Response& res) {
   if (requester(req).teacher()) return true;
-  sendError(res, 403, "forbidden", "only the teacher may do this");
+  sendError(res, ErrorCode::Forbidden, "only the teacher may do this");
   return false;
 }
 

@@ -246,18 +246,18 @@ void registerAnalysisRoutes(httplib::Server& server, Service& service) {
   server.Post(R"(/api/analysis/([a-z]+))", [&service](const httplib::Request& req, httplib::Response& res) {
     PlotKind kind;
     if (!plotKindFromName(req.matches[1], kind))
-      return sendError(res, 404, "not_found",
+      return sendError(res, ErrorCode::NotFound,
                        "unknown analysis '" + std::string(req.matches[1]) + "' (known: polar, lobe, albedo, slice)");
     auto parsed = readJsonBody(req, res);
     if (!parsed) return;
     const json& body = *parsed;
-    if (!body.is_object()) return sendError(res, 400, "invalid_argument", "the body must be a JSON object");
+    if (!body.is_object()) return sendError(res, ErrorCode::InvalidArgument, "the body must be a JSON object");
     bool csv = false;
     std::string format = req.has_param("format") ? req.get_param_value("format") : body.value("format", "json");
     if (format == "csv")
       csv = true;
     else if (format != "json")
-      return sendError(res, 400, "invalid_argument", "format must be json or csv", "format");
+      return sendError(res, ErrorCode::InvalidArgument, "format must be json or csv", "format");
     Result<PlotRequest> request = readRequest(kind, body);
     if (!request) return sendError(res, request.error());
     if (Result<void> valid = checkPlotRequest(request.value()); !valid) return sendError(res, valid.error());
@@ -272,7 +272,7 @@ void registerAnalysisRoutes(httplib::Server& server, Service& service) {
     const auto t0 = std::chrono::steady_clock::now();
     std::vector<Plot> plots;
     for (const Series& s : series.value()) {
-      if (service.stopping) return sendError(res, 503, "unavailable", "server is shutting down");
+      if (service.stopping) return sendError(res, ErrorCode::Unavailable, "server is shutting down");
       Result<Plot> plot = plotBrdf(*service.renderer, *s.brdf, {s.params}, request.value());
       if (!plot) {
         Error e = plot.error();

@@ -46,18 +46,18 @@ bool readForm(const httplib::ContentReader& reader, uint64_t fileCap, std::vecto
 
 // An upload refusal: the usual error body plus `reason` (assetRejectionName).
 void sendRejection(httplib::Response& res, const Error& error, AssetRejection reason) {
-  if (reason == AssetRejection::StorageFull)
-    return sendJson(res, {{"error", "storage_full"}, {"message", error.message}, {"reason", "storage_full"}}, 507);
-  if (reason == AssetRejection::Busy)
-    return sendJson(res, {{"error", "busy"}, {"message", error.message}, {"reason", "busy"}}, 503);
+  // The store's Error says what went wrong; these two rejections answer under codes of their own.
+  ErrorCode code = error.code;
+  if (reason == AssetRejection::StorageFull) code = ErrorCode::StorageFull;
+  if (reason == AssetRejection::Busy) code = ErrorCode::Busy;
   nlohmann::json body{
-      {"error", errorName(error.code)}, {"message", error.message}, {"reason", assetRejectionName(reason)}};
-  if (!error.field.empty()) body["field"] = error.field;
-  sendJson(res, body, httpStatusFor(error.code));
+      {"error", errorCodeName(code)}, {"message", error.message}, {"reason", assetRejectionName(reason)}};
+  if (!error.field.empty() && code == error.code) body["field"] = error.field;
+  sendJson(res, body, errorHttpStatus(code));
 }
 
 void badUpload(httplib::Response& res, const std::string& message, const std::string& field = "file") {
-  sendError(res, 400, "invalid_argument", message, field);
+  sendError(res, ErrorCode::InvalidArgument, message, field);
 }
 
 // Built-ins, Blender worlds and the course's uploads are everyone's; an upload, its uploader's.
@@ -86,7 +86,7 @@ void uploadAsset(Service& service, const httplib::Request& req, httplib::Respons
   };
   if (length > memory.capacity()) {
     drain();
-    return sendError(res, 507, "memory_budget",
+    return sendError(res, ErrorCode::OverBudget,
                      "an upload of " + std::to_string(length >> 20) + " MiB does not fit the uploads' share (" +
                          std::to_string(memory.capacity() >> 20) +
                          " MiB, an eighth) of the server's memory budget "
@@ -96,7 +96,7 @@ void uploadAsset(Service& service, const httplib::Request& req, httplib::Respons
   if (!memory.acquire(kUploadMemoryWait, length)) {
     drain();
     res.set_header("Retry-After", "1");
-    return sendError(res, 503, "busy",
+    return sendError(res, ErrorCode::Busy,
                      "other uploads in flight hold the uploads' share of the memory budget; try again");
   }
   struct Held {
@@ -109,7 +109,7 @@ void uploadAsset(Service& service, const httplib::Request& req, httplib::Respons
   size_t extraParts = 0;
   if (!readForm(reader, service.config.maxUploadBytes + 1, parts, extraParts)) {
     if (res.status == 413)
-      return sendError(res, 413, "payload_too_large",
+      return sendError(res, ErrorCode::PayloadTooLarge,
                        "the request body is larger than " + std::to_string(service.maxRequestBody()) +
                            " bytes (--max-upload-bytes " + std::to_string(service.config.maxUploadBytes) +
                            " plus room for the multipart framing)");
@@ -158,7 +158,7 @@ void listAssets(Service& service, const httplib::Request& req, httplib::Response
   if (req.has_param("kind")) {
     AssetKind k;
     if (!assetKindFromName(req.get_param_value("kind"), k))
-      return sendError(res, 400, "invalid_argument", "kind must be mesh, texture or environment", "kind");
+      return sendError(res, ErrorCode::InvalidArgument, "kind must be mesh, texture or environment", "kind");
     kind = k;
   }
   const Identity& who = requester(req);
@@ -173,7 +173,7 @@ void getAsset(Service& service, const httplib::Request& req, httplib::Response& 
   const std::string id = req.matches[1];
   std::optional<AssetRecord> found = service.assets->find(id);
   if (!found || !assetReadable(requester(req), *found))
-    return sendError(res, 404, "not_found", "no asset '" + id.substr(0, 128) + "'", "id");
+    return sendError(res, ErrorCode::NotFound, "no asset '" + id.substr(0, 128) + "'", "id");
   sendJson(res, assetToJson(*found));
 }
 
@@ -183,14 +183,14 @@ void deleteAsset(Service& service, const httplib::Request& req, httplib::Respons
   const Identity& who = requester(req);
   std::optional<AssetRecord> found = service.assets->find(id);
   if (!found || !assetReadable(who, *found))
-    return sendError(res, 404, "not_found", "no asset '" + id.substr(0, 128) + "'", "id");
+    return sendError(res, ErrorCode::NotFound, "no asset '" + id.substr(0, 128) + "'", "id");
   if (found->source != "upload")
-    return sendError(res, 409, "conflict", "asset '" + id + "' is built in and cannot be deleted", "id");
+    return sendError(res, ErrorCode::Conflict, "asset '" + id + "' is built in and cannot be deleted", "id");
   if (!canDelete(who, found->owner))
-    return sendError(res, 403, "forbidden", "only its uploader or the teacher deletes asset '" + id + "'", "id");
+    return sendError(res, ErrorCode::Forbidden, "only its uploader or the teacher deletes asset '" + id + "'", "id");
   Result<bool> removed = service.assets->remove(id);
-  if (!removed) return sendError(res, 500, "storage_error", removed.error().message);
-  if (!removed.value()) return sendError(res, 404, "not_found", "no asset '" + id.substr(0, 128) + "'", "id");
+  if (!removed) return sendError(res, ErrorCode::StorageError, removed.error().message);
+  if (!removed.value()) return sendError(res, ErrorCode::NotFound, "no asset '" + id.substr(0, 128) + "'", "id");
   res.status = 204;
 }
 

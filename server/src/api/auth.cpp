@@ -21,7 +21,7 @@ nlohmann::json quotasJson(const Service& service, const Identity& who) {
 // The user store of tokens mode; in the other modes answers 400 unsupported and returns null.
 UserStore* tokenStore(Service& service, httplib::Response& res) {
   if (UserStore* users = service.auth->users()) return users;
-  sendError(res, 400, "unsupported",
+  sendError(res, ErrorCode::Unsupported,
             std::string("there are no tokens to manage with --auth ") + authModeName(service.auth->mode()));
   return nullptr;
 }
@@ -32,7 +32,7 @@ UserStore* teachersTokenStore(Service& service, const httplib::Request& req, htt
 }
 
 void sendStoreError(httplib::Response& res, const Error& error) {
-  sendError(res, 500, "storage_error", error.message);
+  sendError(res, ErrorCode::StorageError, error.message);
 }
 
 void registerSelfRoutes(httplib::Server& server, Service& service) {
@@ -52,19 +52,19 @@ void registerSelfRoutes(httplib::Server& server, Service& service) {
     auto body = readJsonBody(req, res);
     if (!body) return;
     if (!body->is_object() || !body->contains("code") || !(*body)["code"].is_string())
-      return sendError(res, 400, "invalid_argument", "send {\"code\": \"...\", \"display_name\": \"...\"}", "code");
+      return sendError(res, ErrorCode::InvalidArgument, "send {\"code\": \"...\", \"display_name\": \"...\"}", "code");
     const std::string displayName =
         (*body).contains("display_name") && (*body)["display_name"].is_string()
             ? cleanDisplayName((*body)["display_name"].get<std::string>())
             : std::string();
     if (displayName.empty())
-      return sendError(res, 400, "invalid_argument", "display_name: pick a name to show (1-64 characters)",
+      return sendError(res, ErrorCode::InvalidArgument, "display_name: pick a name to show (1-64 characters)",
                        "display_name");
     if (!users->joinCodeValid((*body)["code"].get<std::string>()))
-      return sendError(res, 404, "not_found", "this join code is unknown, expired or withdrawn; ask for a new link",
+      return sendError(res, ErrorCode::NotFound, "this join code is unknown, expired or withdrawn; ask for a new link",
                        "code");
     if (users->listUsers().size() >= kMaxUsers)
-      return sendError(res, 507, "storage_full", "the class has " + std::to_string(kMaxUsers) + " users already");
+      return sendError(res, ErrorCode::StorageFull, "the class has " + std::to_string(kMaxUsers) + " users already");
     Result<UserRecord> user = users->addStudentNamedAfter(displayName);
     if (!user) return sendStoreError(res, user.error());
     Result<IssuedToken> token = users->issueToken(user->user);
@@ -77,7 +77,8 @@ void registerSelfRoutes(httplib::Server& server, Service& service) {
     UserStore* users = tokenStore(service, res);
     if (!users) return;
     if (requester(req).tokenId.empty())
-      return sendError(res, 400, "unsupported", "the admin token is revoked by changing it where the server reads it");
+      return sendError(res, ErrorCode::Unsupported,
+                       "the admin token is revoked by changing it where the server reads it");
     if (Result<void> revoked = users->revokePresented(Authenticator::bearerToken(req)); !revoked)
       return sendStoreError(res, revoked.error());
     res.status = 204;
@@ -95,7 +96,7 @@ void registerJoinCodeRoutes(httplib::Server& server, Service& service) {
       if (body->is_object() && body->contains("ttl_minutes")) {
         const nlohmann::json& ttl = (*body)["ttl_minutes"];
         if (!ttl.is_number_integer() || ttl.get<int64_t>() < 1 || ttl.get<int64_t>() > kMaxJoinCodeMinutes)
-          return sendError(res, 400, "invalid_argument",
+          return sendError(res, ErrorCode::InvalidArgument,
                            "ttl_minutes must be an integer in [1, " + std::to_string(kMaxJoinCodeMinutes) + "]",
                            "ttl_minutes");
         minutes = ttl.get<int>();
@@ -122,7 +123,7 @@ void registerJoinCodeRoutes(httplib::Server& server, Service& service) {
     if (!users) return;
     Result<bool> revoked = users->revokeJoinCode(std::string(req.matches[1]));
     if (!revoked) return sendStoreError(res, revoked.error());
-    if (!revoked.value()) return sendError(res, 404, "not_found", "no join code with that id", "id");
+    if (!revoked.value()) return sendError(res, ErrorCode::NotFound, "no join code with that id", "id");
     res.status = 204;
   });
 }
@@ -149,31 +150,32 @@ void registerUserRoutes(httplib::Server& server, Service& service) {
     auto body = readJsonBody(req, res);
     if (!body) return;
     if (!body->is_object() || !body->contains("user") || !(*body)["user"].is_string())
-      return sendError(res, 400, "invalid_argument", "send {\"user\": \"alice\"} (display_name and role optional)",
+      return sendError(res, ErrorCode::InvalidArgument, "send {\"user\": \"alice\"} (display_name and role optional)",
                        "user");
     const std::string user = (*body)["user"].get<std::string>();
     if (!isValidUserName(user) || isReservedUserName(user))
-      return sendError(res, 400, "invalid_argument",
+      return sendError(res, ErrorCode::InvalidArgument,
                        "user names are 1-64 of [a-z0-9._@-], starting with a letter or digit, and not a reserved word",
                        "user");
     std::string display = user;
     if (body->contains("display_name")) {
       if (!(*body)["display_name"].is_string() || cleanDisplayName((*body)["display_name"].get<std::string>()).empty())
-        return sendError(res, 400, "invalid_argument", "display_name must be 1-64 characters of text", "display_name");
+        return sendError(res, ErrorCode::InvalidArgument, "display_name must be 1-64 characters of text",
+                         "display_name");
       display = cleanDisplayName((*body)["display_name"].get<std::string>());
     }
     Role role = Role::Student;
     if (body->contains("role")) {
       const nlohmann::json& r = (*body)["role"];
       if (r != "student" && r != "teacher")
-        return sendError(res, 400, "invalid_argument", "role is \"student\" or \"teacher\"", "role");
+        return sendError(res, ErrorCode::InvalidArgument, "role is \"student\" or \"teacher\"", "role");
       role = r == "teacher" ? Role::Teacher : Role::Student;
     }
     if (users->listUsers().size() >= kMaxUsers)
-      return sendError(res, 507, "storage_full", "the class has " + std::to_string(kMaxUsers) + " users already");
+      return sendError(res, ErrorCode::StorageFull, "the class has " + std::to_string(kMaxUsers) + " users already");
     bool taken = false;
     Result<UserRecord> made = users->addUser(user, display, role, taken);
-    if (taken) return sendError(res, 409, "conflict", "user '" + user + "' exists already", "user");
+    if (taken) return sendError(res, ErrorCode::Conflict, "user '" + user + "' exists already", "user");
     if (!made) return sendStoreError(res, made.error());
     Result<IssuedToken> token = users->issueToken(user);
     if (!token) return sendStoreError(res, token.error());
@@ -185,7 +187,7 @@ void registerUserRoutes(httplib::Server& server, Service& service) {
     UserStore* users = teachersTokenStore(service, req, res);
     if (!users) return;
     const std::string user = req.matches[1];
-    if (!users->findUser(user)) return sendError(res, 404, "not_found", "no user '" + user + "'", "user");
+    if (!users->findUser(user)) return sendError(res, ErrorCode::NotFound, "no user '" + user + "'", "user");
     Result<IssuedToken> token = users->issueToken(user);
     if (!token) return sendStoreError(res, token.error());
     sendJson(res, {{"token", token->token}, {"token_id", token->id}}, 201);
@@ -197,7 +199,7 @@ void registerUserRoutes(httplib::Server& server, Service& service) {
     if (!users) return;
     Result<bool> revoked = users->revokeToken(std::string(req.matches[1]), std::string(req.matches[2]));
     if (!revoked) return sendStoreError(res, revoked.error());
-    if (!revoked.value()) return sendError(res, 404, "not_found", "that user has no token with that id", "id");
+    if (!revoked.value()) return sendError(res, ErrorCode::NotFound, "that user has no token with that id", "id");
     res.status = 204;
   });
 
@@ -206,7 +208,8 @@ void registerUserRoutes(httplib::Server& server, Service& service) {
     if (!users) return;
     Result<bool> removed = users->removeUser(std::string(req.matches[1]));
     if (!removed) return sendStoreError(res, removed.error());
-    if (!removed.value()) return sendError(res, 404, "not_found", "no user '" + std::string(req.matches[1]) + "'", "user");
+    if (!removed.value())
+      return sendError(res, ErrorCode::NotFound, "no user '" + std::string(req.matches[1]) + "'", "user");
     res.status = 204;
   });
 }

@@ -7,12 +7,12 @@ namespace brdfa::server {
 std::shared_ptr<const BrdfEntry> readableBrdfOr404(Service& service, const Identity& who, const std::string& name,
                                                    httplib::Response& res) {
   if (!isValidQualifiedBrdfName(name)) {
-    sendError(res, 400, "invalid_argument", std::string("BRDF ") + kBrdfNameRule, "name");
+    sendError(res, ErrorCode::InvalidArgument, std::string("BRDF ") + kBrdfNameRule, "name");
     return nullptr;
   }
   auto entry = service.brdfs.find(name);
   if (!entry || !canReadBrdf(who, *entry)) {
-    sendError(res, 404, "not_found", "no BRDF named '" + name + "'", "name");
+    sendError(res, ErrorCode::NotFound, "no BRDF named '" + name + "'", "name");
     return nullptr;
   }
   return entry;
@@ -20,7 +20,7 @@ std::shared_ptr<const BrdfEntry> readableBrdfOr404(Service& service, const Ident
 
 bool mayWriteBrdfName(Service& service, const Identity& who, const std::string& name, httplib::Response& res) {
   if (!isValidQualifiedBrdfName(name)) {
-    sendError(res, 400, "invalid_argument", std::string("BRDF ") + kBrdfNameRule, "name");
+    sendError(res, ErrorCode::InvalidArgument, std::string("BRDF ") + kBrdfNameRule, "name");
     return false;
   }
   const std::string owner(brdfNameOwner(name));
@@ -30,12 +30,12 @@ bool mayWriteBrdfName(Service& service, const Identity& who, const std::string& 
     auto entry = service.brdfs.find(name);
     auto broken = entry ? std::nullopt : service.brdfs.findBroken(name);
     if (!(entry && canReadBrdf(who, *entry)) && !(broken && canReadBrdf(who, *broken))) {
-      sendError(res, 404, "not_found", "no BRDF named '" + name + "'", "name");
+      sendError(res, ErrorCode::NotFound, "no BRDF named '" + name + "'", "name");
       return false;
     }
   }
   const std::string base = owner.empty() ? name : name.substr(owner.size() + 1);
-  sendError(res, 403, "forbidden",
+  sendError(res, ErrorCode::Forbidden,
             who.teacher() ? "BRDF '" + name + "' is " + owner + "'s: the teacher reads and deletes it, only " + owner +
                                 " changes it"
                           : "you save BRDFs under your own name: '" + who.brdfNamespace() + base + "'",

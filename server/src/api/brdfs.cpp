@@ -35,7 +35,7 @@ nlohmann::json compileReport(const Compiled& c) {
 
 // A saved file that did not parse: listed so it can be seen, fixed (PUT) or deleted.
 nlohmann::json brokenToJson(const BrokenBrdf& b, bool withSource) {
-  nlohmann::json error{{"error", errorName(b.error.code)}, {"message", b.error.message}};
+  nlohmann::json error{{"error", errorCodeName(b.error.code)}, {"message", b.error.message}};
   if (!b.error.diagnostics.empty()) error["diagnostics"] = diagnosticsToJson(b.error.diagnostics);
   nlohmann::json out{{"name", b.name}, {"format", nullptr}, {"builtin", false}, {"params", nlohmann::json::array()},
                      {"broken", true},   {"error", error}};
@@ -78,12 +78,12 @@ void getBrdf(Service& service, const httplib::Request& req, httplib::Response& r
   const Identity& who = requester(req);
   std::string name = req.matches[1];
   if (!isValidQualifiedBrdfName(name))
-    return sendError(res, 400, "invalid_argument", std::string("BRDF ") + kBrdfNameRule, "name");
+    return sendError(res, ErrorCode::InvalidArgument, std::string("BRDF ") + kBrdfNameRule, "name");
   if (auto entry = service.brdfs.find(name); entry && canReadBrdf(who, *entry))
     return sendJson(res, brdfEntryToJson(*entry, true));
   if (auto broken = service.brdfs.findBroken(name); broken && canReadBrdf(who, *broken))
     return sendJson(res, brokenToJson(*broken, true));
-  sendError(res, 404, "not_found", "no BRDF named '" + name + "'", "name");
+  sendError(res, ErrorCode::NotFound, "no BRDF named '" + name + "'", "name");
 }
 
 void putBrdf(Service& service, const httplib::Request& req, httplib::Response& res,
@@ -93,13 +93,13 @@ void putBrdf(Service& service, const httplib::Request& req, httplib::Response& r
   if (!mayWriteBrdfName(service, who, name, res)) return;
   // Checked before compiling to fail fast; putUser checks again atomically.
   if (auto existing = service.brdfs.find(name); existing && existing->builtin)
-    return sendError(res, 409, "conflict", "BRDF '" + name + "' is built in and read-only", "name");
+    return sendError(res, ErrorCode::Conflict, "BRDF '" + name + "' is built in and read-only", "name");
   auto text = readBrdfTextBody(req, res, reader);
   if (!text) return;
   Result<Compiled> compiled = parseAndCompile(service, *text);
   if (!compiled) return sendError(res, compiled.error());
   BrdfLibrary* library = service.brdfs.libraryFor(name, /*create=*/true);
-  if (!library) return sendError(res, 500, "storage_error", "cannot open the library of '" + name + "'");
+  if (!library) return sendError(res, ErrorCode::StorageError, "cannot open the library of '" + name + "'");
   Error storeError;
   std::shared_ptr<const BrdfEntry> entry;  // what this PUT stored, even if a DELETE follows at once
   const int quota = service.quotaFor(who, &Quotas::brdfs);
@@ -110,9 +110,9 @@ void putBrdf(Service& service, const httplib::Request& req, httplib::Response& r
                                  " saved BRDFs, the most one person may (--quota-brdfs " + std::to_string(quota) +
                                  "); delete one (DELETE /api/brdfs/" + who.brdfNamespace() + "<name>)");
   if (outcome == BrdfLibrary::PutOutcome::StoreFailed)
-    return sendError(res, 500, "storage_error", "cannot save BRDF '" + name + "': " + storeError.message);
+    return sendError(res, ErrorCode::StorageError, "cannot save BRDF '" + name + "': " + storeError.message);
   if (outcome == BrdfLibrary::PutOutcome::BuiltinConflict)
-    return sendError(res, 409, "conflict", "BRDF '" + name + "' is built in and read-only", "name");
+    return sendError(res, ErrorCode::Conflict, "BRDF '" + name + "' is built in and read-only", "name");
   nlohmann::json body = brdfEntryToJson(*entry, false);
   body.update(compileReport(compiled.value()));
   sendJson(res, body, outcome == BrdfLibrary::PutOutcome::Created ? 201 : 200);
@@ -127,12 +127,12 @@ void patchBrdf(Service& service, const httplib::Request& req, httplib::Response&
   if (!body) return;
   auto shared = body->is_object() ? body->find("shared") : body->end();
   if (!body->is_object() || body->size() != 1 || shared == body->end() || !shared->is_boolean())
-    return sendError(res, 400, "invalid_argument", "send {\"shared\": true} or {\"shared\": false}", "shared");
+    return sendError(res, ErrorCode::InvalidArgument, "send {\"shared\": true} or {\"shared\": false}", "shared");
   if (brdfNameOwner(name).empty())
-    return sendError(res, 400, "invalid_argument", "course BRDFs are read by everyone already", "name");
+    return sendError(res, ErrorCode::InvalidArgument, "course BRDFs are read by everyone already", "name");
   Result<bool> changed = service.brdfs.libraryFor(name)->setShared(name, shared->get<bool>());
-  if (!changed) return sendError(res, 500, "storage_error", changed.error().message);
-  if (!changed.value()) return sendError(res, 404, "not_found", "no BRDF named '" + name + "'", "name");
+  if (!changed) return sendError(res, ErrorCode::StorageError, changed.error().message);
+  if (!changed.value()) return sendError(res, ErrorCode::NotFound, "no BRDF named '" + name + "'", "name");
   if (auto entry = service.brdfs.find(name)) return sendJson(res, brdfEntryToJson(*entry, false));
   sendJson(res, {{"name", name}, {"shared", shared->get<bool>()}});  // a broken one
 }
@@ -141,26 +141,26 @@ void deleteBrdf(Service& service, const httplib::Request& req, httplib::Response
   const Identity& who = requester(req);
   std::string name = req.matches[1];
   if (!isValidQualifiedBrdfName(name))
-    return sendError(res, 400, "invalid_argument", std::string("BRDF ") + kBrdfNameRule, "name");
+    return sendError(res, ErrorCode::InvalidArgument, std::string("BRDF ") + kBrdfNameRule, "name");
   auto entry = service.brdfs.find(name);
   auto broken = entry ? std::nullopt : service.brdfs.findBroken(name);
   const bool visible = (entry && canReadBrdf(who, *entry)) || (broken && canReadBrdf(who, *broken));
-  if (!visible) return sendError(res, 404, "not_found", "no BRDF named '" + name + "'", "name");
+  if (!visible) return sendError(res, ErrorCode::NotFound, "no BRDF named '" + name + "'", "name");
   if (entry && entry->builtin)
-    return sendError(res, 409, "conflict", "BRDF '" + name + "' is built in and cannot be deleted", "name");
+    return sendError(res, ErrorCode::Conflict, "BRDF '" + name + "' is built in and cannot be deleted", "name");
   if (!canDelete(who, std::string(brdfNameOwner(name))))
-    return sendError(res, 403, "forbidden", "only its owner or the teacher deletes BRDF '" + name + "'", "name");
+    return sendError(res, ErrorCode::Forbidden, "only its owner or the teacher deletes BRDF '" + name + "'", "name");
   Error storeError;
   switch (service.brdfs.libraryFor(name)->remove(name, &storeError)) {
     case BrdfLibrary::RemoveOutcome::Removed:  // every person's presets of it too (BrdfCatalog)
       res.status = 204;
       return;
     case BrdfLibrary::RemoveOutcome::StoreFailed:
-      return sendError(res, 500, "storage_error", "cannot delete BRDF '" + name + "': " + storeError.message);
+      return sendError(res, ErrorCode::StorageError, "cannot delete BRDF '" + name + "': " + storeError.message);
     case BrdfLibrary::RemoveOutcome::NotFound:
-      return sendError(res, 404, "not_found", "no BRDF named '" + name + "'", "name");
+      return sendError(res, ErrorCode::NotFound, "no BRDF named '" + name + "'", "name");
     case BrdfLibrary::RemoveOutcome::Builtin:
-      return sendError(res, 409, "conflict", "BRDF '" + name + "' is built in and cannot be deleted", "name");
+      return sendError(res, ErrorCode::Conflict, "BRDF '" + name + "' is built in and cannot be deleted", "name");
   }
 }
 

@@ -42,22 +42,23 @@ void registerDifferenceRoutes(httplib::Server& server, Service& service) {
   server.Get("/api/sessions/([^/]+)/difference", [&service](const httplib::Request& req, httplib::Response& res) {
     const std::string format = req.has_param("format") ? req.get_param_value("format") : "png";
     if (format != "png" && format != "json")
-      return sendError(res, 400, "invalid_argument", "format must be png or json", "format");
+      return sendError(res, ErrorCode::InvalidArgument, "format must be png or json", "format");
     if (!req.has_param("against"))
-      return sendError(res, 400, "invalid_argument", "against: name the session to compare with", "against");
+      return sendError(res, ErrorCode::InvalidArgument, "against: name the session to compare with", "against");
     double range = 0;
     if (req.has_param("range")) {
       const std::string text = req.get_param_value("range");
       char* end = nullptr;
       range = std::strtod(text.c_str(), &end);
       if (text.empty() || *end != '\0' || !(range > 0) || !std::isfinite(range))
-        return sendError(res, 400, "invalid_argument", "range must be a positive number", "range");
+        return sendError(res, ErrorCode::InvalidArgument, "range must be a positive number", "range");
     }
     auto a = sessionOr404(service, req, res, SessionAccess::Read);
     if (!a) return;
     auto b = service.sessions->find(req.get_param_value("against"));
     if (b && !canReadSession(requester(req), *b)) b = nullptr;  // someone else's: as if there were none
-    if (!b) return sendError(res, 404, "not_found", "no session '" + req.get_param_value("against") + "'", "against");
+    if (!b)
+      return sendError(res, ErrorCode::NotFound, "no session '" + req.get_param_value("against") + "'", "against");
     b->ensureInitialized();
     a->touch();
     b->touch();
@@ -65,7 +66,7 @@ void registerDifferenceRoutes(httplib::Server& server, Service& service) {
     // Two waits at most: counted as frame waiters like GET .../frame.
     if (service.frameWaiters.fetch_add(1) >= service.maxFrameWaiters) {
       service.frameWaiters.fetch_sub(1);
-      return sendError(res, 503, "busy", "too many requests waiting for samples; retry later");
+      return sendError(res, ErrorCode::Busy, "too many requests waiting for samples; retry later");
     }
     Result<Frame> fa = linearFrame(*a);
     Result<Frame> fb = fa ? linearFrame(*b) : Result<Frame>(fa.error());
@@ -94,7 +95,7 @@ void registerDifferenceRoutes(httplib::Server& server, Service& service) {
     res.set_header("X-Difference-Range", number(d.range));
     res.set_header("X-Samples", std::to_string(fa->stats.spp) + "," + std::to_string(fb->stats.spp));
     std::vector<uint8_t> png = encodePng(d.rgba8.data(), d.width, d.height);
-    if (png.empty()) return sendError(res, 500, "internal", "could not encode the difference image");
+    if (png.empty()) return sendError(res, ErrorCode::Internal, "could not encode the difference image");
     res.set_content(reinterpret_cast<const char*>(png.data()), png.size(), "image/png");
   });
 }

@@ -24,7 +24,7 @@ void sendJobRefusal(httplib::Response& res, const JobSubmitted& submitted, const
                              "you have " + std::to_string(submitted.ownerOpen) +
                                  " jobs queued or running, the most one person may (--quota-jobs " +
                                  std::to_string(owner.maxOpen) + "); wait for one or cancel it (DELETE /api/jobs/{id})");
-  sendError(res, 429, "too_many_jobs", serverCap);
+  sendError(res, ErrorCode::TooManyJobs, serverCap);
 }
 
 // Whether the requester may see job `id` (its owner, the teacher); else answers 404, exactly as
@@ -32,7 +32,7 @@ void sendJobRefusal(httplib::Response& res, const JobSubmitted& submitted, const
 bool jobVisible(Service& service, const httplib::Request& req, httplib::Response& res, const std::string& id) {
   std::optional<std::string> owner = service.jobs->ownerOf(id);
   if (owner && canRead(requester(req), *owner)) return true;
-  sendError(res, 404, "not_found", "no job '" + id + "'", "id");
+  sendError(res, ErrorCode::NotFound, "no job '" + id + "'", "id");
   return false;
 }
 
@@ -44,18 +44,19 @@ void registerJobRoutes(httplib::Server& server, Service& service) {
     auto body = readJsonBody(req, res);
     if (!body) return;
     if (!body->is_object())
-      return sendError(res, 400, "invalid_argument", "the body is {\"names\": [...]} or {\"all\": true}");
+      return sendError(res, ErrorCode::InvalidArgument, "the body is {\"names\": [...]} or {\"all\": true}");
     for (auto it = body->begin(); it != body->end(); ++it)
       if (it.key() != "names" && it.key() != "all")
-        return sendError(res, 400, "invalid_argument", "unknown key '" + it.key() + "' (known: names, all)", it.key());
+        return sendError(res, ErrorCode::InvalidArgument, "unknown key '" + it.key() + "' (known: names, all)",
+                         it.key());
     bool all = false;
     if (auto it = body->find("all"); it != body->end()) {
-      if (!it->is_boolean()) return sendError(res, 400, "invalid_argument", "all: must be true or false", "all");
+      if (!it->is_boolean()) return sendError(res, ErrorCode::InvalidArgument, "all: must be true or false", "all");
       all = it->get<bool>();
     }
     auto namesIt = body->find("names");
     if (all == (namesIt != body->end()))
-      return sendError(res, 400, "invalid_argument", "give exactly one of \"names\": [...] or \"all\": true");
+      return sendError(res, ErrorCode::InvalidArgument, "give exactly one of \"names\": [...] or \"all\": true");
 
     const Identity& who = requester(req);
     std::vector<JobItem> items;
@@ -70,14 +71,14 @@ void registerJobRoutes(httplib::Server& server, Service& service) {
       std::sort(items.begin(), items.end(), [](const JobItem& a, const JobItem& b) { return a.name < b.name; });
     } else {
       if (!namesIt->is_array())
-        return sendError(res, 400, "invalid_argument", "names: must be an array of BRDF names", "names");
-      if (namesIt->empty()) return sendError(res, 400, "invalid_argument", "names: the list is empty", "names");
+        return sendError(res, ErrorCode::InvalidArgument, "names: must be an array of BRDF names", "names");
+      if (namesIt->empty()) return sendError(res, ErrorCode::InvalidArgument, "names: the list is empty", "names");
       std::set<std::string> seen;
       nlohmann::json unknown = nlohmann::json::array();
       for (size_t i = 0; i < namesIt->size(); ++i) {
         const nlohmann::json& n = (*namesIt)[i];
         std::string field = "names[" + std::to_string(i) + "]";
-        if (!n.is_string()) return sendError(res, 400, "invalid_argument", field + ": must be a string", field);
+        if (!n.is_string()) return sendError(res, ErrorCode::InvalidArgument, field + ": must be a string", field);
         std::string name = n.get<std::string>();
         if (!seen.insert(name).second) continue;  // duplicates are tested once
         if (auto entry = service.brdfs.find(name); entry && canReadBrdf(who, *entry))
@@ -98,7 +99,7 @@ void registerJobRoutes(httplib::Server& server, Service& service) {
                         404);
       }
     }
-    if (items.empty()) return sendError(res, 400, "invalid_argument", "no BRDFs to test");
+    if (items.empty()) return sendError(res, ErrorCode::InvalidArgument, "no BRDFs to test");
     size_t total = items.size();
     const JobOwner owner = jobOwner(service, who);
     JobSubmitted submitted = service.jobs->submit(std::move(items), owner);
@@ -137,7 +138,7 @@ void registerJobRoutes(httplib::Server& server, Service& service) {
     std::string id = req.matches[1];
     if (!jobVisible(service, req, res, id)) return;
     auto job = service.jobs->describe(id);
-    if (!job) return sendError(res, 404, "not_found", "no job '" + id + "'", "id");
+    if (!job) return sendError(res, ErrorCode::NotFound, "no job '" + id + "'", "id");
     sendJson(res, *job);
   });
 
@@ -146,9 +147,9 @@ void registerJobRoutes(httplib::Server& server, Service& service) {
   server.Delete("/api/jobs/([^/]+)", [&service](const httplib::Request& req, httplib::Response& res) {
     std::string id = req.matches[1];
     if (!jobVisible(service, req, res, id)) return;
-    if (!service.jobs->cancel(id)) return sendError(res, 404, "not_found", "no job '" + id + "'", "id");
+    if (!service.jobs->cancel(id)) return sendError(res, ErrorCode::NotFound, "no job '" + id + "'", "id");
     auto job = service.jobs->describe(id);
-    if (!job) return sendError(res, 404, "not_found", "no job '" + id + "'", "id");
+    if (!job) return sendError(res, ErrorCode::NotFound, "no job '" + id + "'", "id");
     sendJson(res, *job);
   });
 }

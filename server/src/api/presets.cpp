@@ -37,11 +37,12 @@ std::optional<std::string> presetPerson(const httplib::Request& req, httplib::Re
   const std::string owner = req.get_param_value("owner");
   if (owner == who.user) return own;
   if (!who.teacher() || !isValidUserName(owner)) {
-    sendError(res, 404, "not_found", "no presets of '" + owner + "'", "owner");
+    sendError(res, ErrorCode::NotFound, "no presets of '" + owner + "'", "owner");
     return std::nullopt;
   }
   if (write) {
-    sendError(res, 403, "forbidden", "the teacher reads and deletes a student's presets; only they change them", "owner");
+    sendError(res, ErrorCode::Forbidden, "the teacher reads and deletes a student's presets; only they change them",
+              "owner");
     return std::nullopt;
   }
   return owner;
@@ -57,7 +58,7 @@ std::optional<PresetTarget> presetTarget(Service& service, const httplib::Reques
   PresetTarget t{req.matches[1], req.matches.size() > 2 ? std::string(req.matches[2]) : std::string(), {}};
   if (!readableBrdfOr404(service, requester(req), t.name, res)) return std::nullopt;
   if (req.matches.size() > 2 && !isValidBrdfName(t.preset)) {
-    sendError(res, 400, "invalid_argument", kPresetNameRule, "preset");
+    sendError(res, ErrorCode::InvalidArgument, kPresetNameRule, "preset");
     return std::nullopt;
   }
   std::optional<std::string> person = presetPerson(req, res, write && !deleting);
@@ -92,10 +93,11 @@ void registerPresetRoutes(httplib::Server& server, Service& service) {
     if (!t) return;
     std::string text;
     if (!readTextFile(std::filesystem::path(service.brdfs.presetDir(t->person, t->name)) / (t->preset + ".json"), text))
-      return sendError(res, 404, "not_found", "BRDF '" + t->name + "' has no preset '" + t->preset + "'", "preset");
+      return sendError(res, ErrorCode::NotFound, "BRDF '" + t->name + "' has no preset '" + t->preset + "'", "preset");
     nlohmann::json values = nlohmann::json::parse(text, nullptr, /*allow_exceptions=*/false);
     if (!values.is_object())
-      return sendError(res, 500, "storage_error", "preset file of '" + t->name + "/" + t->preset + "' is not a JSON object");
+      return sendError(res, ErrorCode::StorageError,
+                       "preset file of '" + t->name + "/" + t->preset + "' is not a JSON object");
     sendJson(res, values);
   });
 
@@ -105,11 +107,11 @@ void registerPresetRoutes(httplib::Server& server, Service& service) {
     auto body = readJsonBody(req, res);
     if (!body) return;
     if (!body->is_object())
-      return sendError(res, 400, "invalid_argument", "a preset is a JSON object of parameter values");
+      return sendError(res, ErrorCode::InvalidArgument, "a preset is a JSON object of parameter values");
     // Checked and written against the BRDF the name holds now, with no BRDF store or removal in
     // between (BrdfLibrary::withEntry).
     service.brdfs.libraryFor(t->name)->withEntry(t->name, [&](std::shared_ptr<const BrdfEntry> entry) {
-      if (!entry) return sendError(res, 404, "not_found", "no BRDF named '" + t->name + "'", "name");
+      if (!entry) return sendError(res, ErrorCode::NotFound, "no BRDF named '" + t->name + "'", "name");
       // Same rules as a scene object's "params"; stored normalized (bools as true/false).
       nlohmann::json values = nlohmann::json::object();
       for (auto it = body->begin(); it != body->end(); ++it) {
@@ -118,9 +120,9 @@ void registerPresetRoutes(httplib::Server& server, Service& service) {
         if (!p) {
           std::string known;
           for (const BrdfParam& q : entry->definition->params) known += (known.empty() ? "" : ", ") + q.name;
-          return sendError(res, 400, "invalid_argument",
-                           field + ": BRDF '" + t->name + "' has no parameter '" + it.key() + "' (known: " + known + ")",
-                           field);
+          return sendError(
+              res, ErrorCode::InvalidArgument,
+              field + ": BRDF '" + t->name + "' has no parameter '" + it.key() + "' (known: " + known + ")", field);
         }
         Result<Vec3> value = paramValueFromJson(*p, it.value(), field);
         if (!value) return sendError(res, value.error());
@@ -132,7 +134,8 @@ void registerPresetRoutes(httplib::Server& server, Service& service) {
       bool existed = std::filesystem::exists(target, ec);
       Result<void> written = writeFileAtomically(target, values.dump(2) + "\n");
       if (!written)
-        return sendError(res, 500, "storage_error", "cannot save preset '" + t->preset + "': " + written.error().message);
+        return sendError(res, ErrorCode::StorageError,
+                         "cannot save preset '" + t->preset + "': " + written.error().message);
       sendJson(res, values, existed ? 200 : 201);
     });
   });
@@ -141,7 +144,7 @@ void registerPresetRoutes(httplib::Server& server, Service& service) {
     auto t = presetTarget(service, req, res, true, /*deleting=*/true);
     if (!t) return;
     service.brdfs.libraryFor(t->name)->withEntry(t->name, [&](std::shared_ptr<const BrdfEntry> entry) {
-      if (!entry) return sendError(res, 404, "not_found", "no BRDF named '" + t->name + "'", "name");
+      if (!entry) return sendError(res, ErrorCode::NotFound, "no BRDF named '" + t->name + "'", "name");
       Result<void> removed =
           removeFileDurably(std::filesystem::path(service.brdfs.presetDir(t->person, t->name)) / (t->preset + ".json"));
       if (removed) {
@@ -149,8 +152,9 @@ void registerPresetRoutes(httplib::Server& server, Service& service) {
         return;
       }
       if (removed.error().code == ErrorCode::NotFound)
-        return sendError(res, 404, "not_found", "BRDF '" + t->name + "' has no preset '" + t->preset + "'", "preset");
-      sendError(res, 500, "storage_error", removed.error().message);
+        return sendError(res, ErrorCode::NotFound, "BRDF '" + t->name + "' has no preset '" + t->preset + "'",
+                         "preset");
+      sendError(res, ErrorCode::StorageError, removed.error().message);
     });
   });
 }

@@ -82,14 +82,14 @@ std::optional<bool> readDownloadParam(const httplib::Request& req, httplib::Resp
   const std::string v = req.get_param_value("download");
   if (v == "1" || v == "true") return true;
   if (v == "0" || v == "false") return false;
-  sendError(res, 400, "invalid_argument", "download must be 1 or 0 (true or false)", "download");
+  sendError(res, ErrorCode::InvalidArgument, "download must be 1 or 0 (true or false)", "download");
   return std::nullopt;
 }
 
 void sendFrame(httplib::Response& res, const std::vector<uint8_t>& bytes, FrameFormat format, const FrameStats& stats,
                const std::string& stem, bool download) {
   if (bytes.empty())
-    return sendError(res, 500, "internal", std::string("could not encode the frame as ") + infoOf(format).name);
+    return sendError(res, ErrorCode::Internal, std::string("could not encode the frame as ") + infoOf(format).name);
   setFrameHeaders(res, stats);
   // `stem` is a session id ([0-9a-f]+ or "default") or "render": nothing to quote or escape.
   res.set_header("Content-Disposition", std::string(download ? "attachment" : "inline") + "; filename=\"" + stem +
@@ -113,7 +113,8 @@ bool takeRenderSlot(Service& service, const httplib::Request& req, httplib::Resp
   quota.counter = &service.rendersInFlight;
   quota.owner = who.owner();
   if (!service.renderSlots.acquire(kRenderSlotWait)) {
-    sendError(res, 503, "busy", service.stopping ? "server is shutting down" : "too many renders in progress; retry later");
+    sendError(res, ErrorCode::Busy,
+              service.stopping ? "server is shutting down" : "too many renders in progress; retry later");
     return false;
   }
   guard.slots = &service.renderSlots;
@@ -126,7 +127,7 @@ void registerRenderRoutes(httplib::Server& server, Service& service) {
     if (!parsed) return;
     const nlohmann::json& body = *parsed;
     if (!body.is_object())
-      return sendError(res, 400, "invalid_argument",
+      return sendError(res, ErrorCode::InvalidArgument,
                        "the body must be a JSON object (a scene plus spp, format, brdf_source)");
 
     // Which form: a nested "scene" object, or the scene's fields inline.
@@ -134,12 +135,12 @@ void registerRenderRoutes(httplib::Server& server, Service& service) {
     if (auto it = body.find("scene"); it != body.end()) {
       for (auto kv = body.begin(); kv != body.end(); ++kv)
         if (!isRequestKey(kv.key()))
-          return sendError(res, 400, "invalid_argument",
+          return sendError(res, ErrorCode::InvalidArgument,
                            "unknown key '" + kv.key() + "' (with \"scene\" given, scene fields belong inside it)",
                            kv.key());
       sceneJson = *it;
       if (!sceneJson.is_object())
-        return sendError(res, 400, "invalid_argument", "scene must be a JSON object", "scene");
+        return sendError(res, ErrorCode::InvalidArgument, "scene must be a JSON object", "scene");
     } else {
       for (auto kv = body.begin(); kv != body.end(); ++kv)
         if (!isRequestKey(kv.key())) sceneJson[kv.key()] = kv.value();
@@ -155,7 +156,8 @@ void registerRenderRoutes(httplib::Server& server, Service& service) {
     if (auto it = body.find("format"); it != body.end()) {
       std::optional<FrameFormat> f = it->is_string() ? frameFormatFromName(it->get<std::string>()) : std::nullopt;
       if (!f)
-        return sendError(res, 400, "invalid_argument", std::string("format must be ") + kFrameFormatChoices, "format");
+        return sendError(res, ErrorCode::InvalidArgument, std::string("format must be ") + kFrameFormatChoices,
+                         "format");
       format = *f;
     }
     std::optional<bool> download = readDownloadParam(req, res);
@@ -163,10 +165,10 @@ void registerRenderRoutes(httplib::Server& server, Service& service) {
     std::shared_ptr<const BrdfDefinition> inlineBrdf;
     if (auto it = body.find("brdf_source"); it != body.end()) {
       if (!it->is_string())
-        return sendError(res, 400, "invalid_argument", "brdf_source must be a string", "brdf_source");
+        return sendError(res, ErrorCode::InvalidArgument, "brdf_source must be a string", "brdf_source");
       const std::string& text = it->get_ref<const std::string&>();
       if (text.size() > kMaxBrdfSource)
-        return sendError(res, 413, "payload_too_large",
+        return sendError(res, ErrorCode::PayloadTooLarge,
                          "brdf_source is larger than " + std::to_string(kMaxBrdfSource) + " bytes", "brdf_source");
       Result<BrdfDefinition> def = parseBrdf(text);
       if (!def) return sendError(res, def.error());
@@ -193,16 +195,17 @@ void registerRenderRoutes(httplib::Server& server, Service& service) {
     // Every pass adds at least one sample, so spp passes suffice; more means the renderer never
     // reports convergence, which must not turn into an endless loop on a worker thread.
     for (int passes = 0;; ++passes) {
-      if (service.stopping) return sendError(res, 503, "unavailable", "server is shutting down");
+      if (service.stopping) return sendError(res, ErrorCode::Unavailable, "server is shutting down");
       // A client that hung up gets nothing from the remaining passes: give the slot to the
       // next render now rather than when this one would have finished.
       if (service.connections && service.connections->peerClosed(req.remote_addr, req.remote_port)) {
         std::fprintf(stderr, "render: client %s:%d closed the connection; one-shot render stopped after %d passes\n",
                      req.remote_addr.c_str(), req.remote_port, passes);
-        return sendError(res, 499, "client_closed", "the client closed the connection before the render finished");
+        return sendError(res, ErrorCode::ClientClosed, "the client closed the connection before the render finished");
       }
       if (passes > spp)
-        return sendError(res, 500, "internal", "renderer did not converge after " + std::to_string(passes) + " passes");
+        return sendError(res, ErrorCode::Internal,
+                         "renderer did not converge after " + std::to_string(passes) + " passes");
       Result<FrameStats> pass = v.renderPass();
       if (!pass) return sendError(res, pass.error());
       if (pass.value().done()) break;

@@ -50,7 +50,7 @@ nlohmann::json statsToJson(const FrameStats& s, const std::optional<Error>& rend
                      {"rel_error_elapsed_ms", s.relErrorElapsedMs},
                      {"scene_version", s.sceneVersion}};
   if (s.relError && std::isfinite(*s.relError)) out["rel_error"] = *s.relError;
-  if (renderError) out["error"] = {{"error", errorName(renderError->code)}, {"message", renderError->message}};
+  if (renderError) out["error"] = {{"error", errorCodeName(renderError->code)}, {"message", renderError->message}};
   return out;
 }
 
@@ -230,16 +230,16 @@ std::shared_ptr<Session> sessionOr404(Service& service, const httplib::Request& 
       session && (canReadSession(who, *session) || (access == SessionAccess::ReadWithKey && hasViewKey(req, *session)));
   if (!mayRead && !requesterKnown(req)) {  // a view-key read without the right key: as any tokenless request
     res.set_header("WWW-Authenticate", "Bearer realm=\"brdfa\"");
-    sendError(res, 401, "unauthorized",
+    sendError(res, ErrorCode::Unauthorized,
               "this key does not read session '" + id + "'; send a token or the view key");
     return nullptr;
   }
   if (!mayRead) {
-    sendError(res, 404, "not_found", "no session '" + id + "'", "session");
+    sendError(res, ErrorCode::NotFound, "no session '" + id + "'", "session");
     return nullptr;
   }
   if (access == SessionAccess::Write && !canWrite(who, session->owner())) {
-    sendError(res, 403, "forbidden",
+    sendError(res, ErrorCode::Forbidden,
               session->id() == kDefaultSessionId ? "only the teacher changes the default session; make your own "
                                                    "(POST /api/sessions)"
                                                  : "only its owner changes session '" + id + "'",
@@ -252,7 +252,7 @@ std::shared_ptr<Session> sessionOr404(Service& service, const httplib::Request& 
 
 bool requireScene(Session& session, httplib::Response& res) {
   if (session.hasScene()) return true;
-  sendError(res, 409, "no_scene", "session '" + session.id() + "' has no scene yet; PUT one first");
+  sendError(res, ErrorCode::NoScene, "session '" + session.id() + "' has no scene yet; PUT one first");
   return false;
 }
 
@@ -299,7 +299,7 @@ void createSession(Service& service, const httplib::Request& req, httplib::Respo
                                  "); delete one (DELETE /api/sessions/{id}) or close a tab");
   }
   if (created.full)
-    return sendError(res, 429, "too_many_sessions",
+    return sendError(res, ErrorCode::TooManySessions,
                      "at most " + std::to_string(service.sessions->maxSessions()) + " sessions; delete one first");
   if (!created.session) return sendError(res, *created.error);
   nlohmann::json full = sceneToJson(scene.value(), notes);
@@ -330,9 +330,9 @@ void deleteSession(Service& service, const httplib::Request& req, httplib::Respo
   if (auto session = service.sessions->find(id); session && id != kDefaultSessionId) {
     const Identity& who = requester(req);
     if (!canReadSession(who, *session))
-      return sendError(res, 404, "not_found", "no session '" + id + "'", "session");
+      return sendError(res, ErrorCode::NotFound, "no session '" + id + "'", "session");
     if (!canDelete(who, session->owner()))
-      return sendError(res, 403, "forbidden", "only its owner or the teacher deletes session '" + id + "'",
+      return sendError(res, ErrorCode::Forbidden, "only its owner or the teacher deletes session '" + id + "'",
                        "session");
   }
   switch (service.sessions->remove(id)) {
@@ -340,9 +340,9 @@ void deleteSession(Service& service, const httplib::Request& req, httplib::Respo
       res.status = 204;
       return;
     case SessionManager::RemoveOutcome::NotFound:
-      return sendError(res, 404, "not_found", "no session '" + id + "'", "session");
+      return sendError(res, ErrorCode::NotFound, "no session '" + id + "'", "session");
     case SessionManager::RemoveOutcome::Protected:
-      return sendError(res, 409, "conflict", "the default session cannot be deleted", "session");
+      return sendError(res, ErrorCode::Conflict, "the default session cannot be deleted", "session");
   }
 }
 
@@ -388,17 +388,17 @@ void getStats(Service& service, const httplib::Request& req, httplib::Response& 
 void getConvergence(Service& service, const httplib::Request& req, httplib::Response& res) {
   const std::string format = req.has_param("format") ? req.get_param_value("format") : "json";
   if (format != "json" && format != "csv")
-    return sendError(res, 400, "invalid_argument", "format must be json or csv", "format");
+    return sendError(res, ErrorCode::InvalidArgument, "format must be json or csv", "format");
   std::optional<double> target;
   if (req.has_param("target")) {
     target = parseTargetError(req.get_param_value("target"));
-    if (!target) return sendError(res, 400, "invalid_argument", "target must be a number in (0, 1)", "target");
+    if (!target) return sendError(res, ErrorCode::InvalidArgument, "target must be a number in (0, 1)", "target");
   }
   size_t maxPoints = ConvergenceSeries::kMaxPoints;
   if (req.has_param("max_points")) {
     auto parsed = parseMinSpp(req.get_param_value("max_points"));
     if (!parsed || *parsed < 2 || *parsed > ConvergenceSeries::kMaxPoints)
-      return sendError(res, 400, "invalid_argument",
+      return sendError(res, ErrorCode::InvalidArgument,
                        "max_points must be an integer in [2, " + std::to_string(ConvergenceSeries::kMaxPoints) + "]",
                        "max_points");
     maxPoints = static_cast<size_t>(*parsed);
@@ -418,7 +418,7 @@ void getFrame(Service& service, const httplib::Request& req, httplib::Response& 
   std::optional<FrameFormat> format =
       frameFormatFromName(req.has_param("format") ? req.get_param_value("format") : "png");
   if (!format)
-    return sendError(res, 400, "invalid_argument", std::string("format must be ") + kFrameFormatChoices, "format");
+    return sendError(res, ErrorCode::InvalidArgument, std::string("format must be ") + kFrameFormatChoices, "format");
   std::optional<bool> download = readDownloadParam(req, res);
   if (!download) return;
   // Default 1: "the latest frame" always has at least one sample in it (not a black image
@@ -426,7 +426,7 @@ void getFrame(Service& service, const httplib::Request& req, httplib::Response& 
   uint64_t minSpp = 1;
   if (req.has_param("min_spp")) {
     auto parsed = parseMinSpp(req.get_param_value("min_spp"));
-    if (!parsed) return sendError(res, 400, "invalid_argument", "min_spp must be a non-negative integer", "min_spp");
+    if (!parsed) return sendError(res, ErrorCode::InvalidArgument, "min_spp must be a non-negative integer", "min_spp");
     minSpp = *parsed;
   }
   auto session = sessionOr404(service, req, res, SessionAccess::ReadWithKey);
@@ -436,7 +436,7 @@ void getFrame(Service& service, const httplib::Request& req, httplib::Response& 
   // Only waits that can last hold a worker; an answer available now never counts.
   if (service.frameWaiters.fetch_add(1) >= service.maxFrameWaiters) {
     service.frameWaiters.fetch_sub(1);
-    return sendError(res, 503, "busy",
+    return sendError(res, ErrorCode::Busy,
                      "too many requests waiting for samples (at most " + std::to_string(service.maxFrameWaiters) +
                          "); retry later or without min_spp");
   }
@@ -447,7 +447,7 @@ void getFrame(Service& service, const httplib::Request& req, httplib::Response& 
   service.frameWaiters.fetch_sub(1);
   switch (outcome) {
     case Session::WaitOutcome::Stopped:
-      return sendError(res, 503, "unavailable",
+      return sendError(res, ErrorCode::Unavailable,
                        "the session was stopped (deleted, or the server is shutting down)");
     case Session::WaitOutcome::Failed:
       if (auto err = session->renderError()) return sendError(res, *err);
@@ -460,7 +460,7 @@ void getFrame(Service& service, const httplib::Request& req, httplib::Response& 
   if (*format == FrameFormat::Exr) {
     Frame linear;
     if (!decodePfm(frame->bytes, linear.width, linear.height, linear.rgba32f))
-      return sendError(res, 500, "internal", "could not read back the frame's float radiance");
+      return sendError(res, ErrorCode::Internal, "could not read back the frame's float radiance");
     frame->bytes = encodeFrame(linear, FrameFormat::Exr);
   }
   sendFrame(res, frame->bytes, *format, frame->stats, session->id(), *download);
@@ -474,7 +474,7 @@ void streamFrames(Service& service, const httplib::Request& req, httplib::Respon
   if (!session) return;
   if (service.activeStreams.fetch_add(1) >= service.maxStreams) {
     service.activeStreams.fetch_sub(1);
-    return sendError(res, 503, "too_many_streams",
+    return sendError(res, ErrorCode::TooManyStreams,
                      "at most " + std::to_string(service.maxStreams) + " concurrent streams");
   }
   session->addStreamClient();

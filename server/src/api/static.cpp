@@ -37,15 +37,15 @@ void registerStaticRoutes(httplib::Server& server, Service& service) {
   server.Get("/(.*)", [&service](const httplib::Request& req, httplib::Response& res) {
     std::string rel = req.matches[1];
     if (rel == "api" || rel.rfind("api/", 0) == 0)
-      return sendError(res, 404, "not_found", "no such resource: GET " + req.path);
+      return sendError(res, ErrorCode::NotFound, "no such resource: GET " + req.path);
     if (rel.empty() || rel.back() == '/') rel += "index.html";
     auto path = resolveUnder(std::filesystem::path(service.config.root) / "web", rel);
-    if (!path) return sendError(res, 400, "invalid_argument", "path not allowed: " + req.path, "path");
+    if (!path) return sendError(res, ErrorCode::InvalidArgument, "path not allowed: " + req.path, "path");
     std::error_code ec;
     if (!std::filesystem::is_regular_file(*path, ec))
-      return sendError(res, 404, "not_found", "no such file: " + req.path);
+      return sendError(res, ErrorCode::NotFound, "no such file: " + req.path);
     std::optional<StaticFile> file = service.staticFiles.get(*path);
-    if (!file) return sendError(res, 500, "internal", "cannot read " + req.path);
+    if (!file) return sendError(res, ErrorCode::Internal, "cannot read " + req.path);
     // no-cache: the browser revalidates each time (the UI changes with every build), and the
     // ETag turns an unchanged file into a bodiless 304.
     res.set_header("Cache-Control", "no-cache");

@@ -11,12 +11,13 @@ namespace brdfa::server {
 
 std::optional<nlohmann::json> readJsonBody(const httplib::Request& req, httplib::Response& res) {
   if (req.body.size() > kMaxJsonBody) {
-    sendError(res, 413, "payload_too_large", "request body is larger than " + std::to_string(kMaxJsonBody) + " bytes");
+    sendError(res, ErrorCode::PayloadTooLarge,
+              "request body is larger than " + std::to_string(kMaxJsonBody) + " bytes");
     return std::nullopt;
   }
   JsonBody parsed = parseJsonBody(req.body);
   if (!parsed.ok) {
-    sendError(res, 400, "bad_json", parsed.message);
+    sendError(res, ErrorCode::BadJson, parsed.message);
     return std::nullopt;
   }
   return std::move(parsed.value);
@@ -42,19 +43,21 @@ std::optional<std::string> readBrdfTextBody(const httplib::Request& req, httplib
                         ? reader([&](const httplib::MultipartFormData&) { return !(extraPart = ++parts > 1); }, append)
                         : reader(append);
   if (tooLarge) {
-    sendError(res, 413, "payload_too_large", ".brdf text is larger than " + std::to_string(kMaxBrdfSource) + " bytes");
+    sendError(res, ErrorCode::PayloadTooLarge,
+              ".brdf text is larger than " + std::to_string(kMaxBrdfSource) + " bytes");
     return std::nullopt;
   }
   if (extraPart) {
-    sendError(res, 400, "invalid_argument", "send the .brdf text as the body, or as the only part of a form", "body");
+    sendError(res, ErrorCode::InvalidArgument, "send the .brdf text as the body, or as the only part of a form",
+              "body");
     return std::nullopt;
   }
   if (!read) {
-    sendError(res, 400, "invalid_argument", "the request body could not be read", "body");
+    sendError(res, ErrorCode::InvalidArgument, "the request body could not be read", "body");
     return std::nullopt;
   }
   if (text.empty()) {
-    sendError(res, 400, "invalid_argument", "the request body must be the .brdf text", "body");
+    sendError(res, ErrorCode::InvalidArgument, "the request body must be the .brdf text", "body");
     return std::nullopt;
   }
   return text;
@@ -73,7 +76,7 @@ void setFrameHeaders(httplib::Response& res, const FrameStats& stats) {
 bool refuseWhileDraining(const Service& service, httplib::Response& res) {
   if (!service.draining) return false;
   res.set_header("Retry-After", "1");
-  sendError(res, 503, "draining", "this replica is shutting down and takes no new sessions or jobs; retry");
+  sendError(res, ErrorCode::Draining, "this replica is shutting down and takes no new sessions or jobs; retry");
   return true;
 }
 
@@ -118,7 +121,7 @@ void registerSystemRoutes(httplib::Server& server, Service& service) {
             message = "HTTP " + std::to_string(res.status) + " for " + req.method + " " + req.path;
             break;
         }
-        sendError(res, res.status, errorNameForStatus(res.status), message);
+        sendStatusError(res, message);
         return httplib::Server::HandlerResponse::Handled;
       }));
 
@@ -132,7 +135,7 @@ void registerSystemRoutes(httplib::Server& server, Service& service) {
     } catch (...) {
     }
     std::fprintf(stderr, "error: %s %s threw: %s\n", req.method.c_str(), req.path.c_str(), what.c_str());
-    sendError(res, 500, "internal", "internal error: " + what);
+    sendError(res, ErrorCode::Internal, "internal error: " + what);
   });
 
   // Runs on every response before it is written (the logger runs after): counted here, a

@@ -180,8 +180,7 @@ Result<bool> UserStore::removeUser(std::string_view user) {
   // (authenticate needs both), but no stray token should outlive its user.
   for (const TokenInfo& t : listTokens())
     if (t.user == user) {
-      Result<bool> revoked = revokeToken(user, t.id);
-      if (!revoked) return revoked.takeError();
+      BRDFA_TRY(revokeToken(user, t.id));
     }
   Result<void> removed = removeFileDurably(fs::path(usersDir()) / (std::string(user) + ".json"));
   if (!removed && removed.error().code != ErrorCode::NotFound) return removed.takeError();
@@ -194,8 +193,7 @@ Result<IssuedToken> UserStore::issueToken(const std::string& user) {
   const std::string token = kTokenPrefix + secret;
   const std::string digest = sha256Hex(token);
   const json record{{"user", user}, {"sha256", digest}, {"created_at", nowIso8601()}};
-  Result<void> written = writeFileAtomically(fs::path(tokensDir()) / (digest + ".json"), record.dump() + "\n");
-  if (!written) return written.takeError();
+  BRDFA_TRY(writeFileAtomically(fs::path(tokensDir()) / (digest + ".json"), record.dump() + "\n"));
   return IssuedToken{token, digest.substr(0, kTokenIdLength)};
 }
 
@@ -243,8 +241,7 @@ Result<std::pair<std::string, JoinCodeInfo>> UserStore::issueJoinCode(int ttlMin
                     {"created_at", info.createdAt},
                     {"expires_at", info.expiresAt},
                     {"expires_unix", info.expiresUnix}};
-  Result<void> written = writeFileAtomically(fs::path(codesDir()) / (digest + ".json"), record.dump() + "\n");
-  if (!written) return written.takeError();
+  BRDFA_TRY(writeFileAtomically(fs::path(codesDir()) / (digest + ".json"), record.dump() + "\n"));
   return std::make_pair(code, info);
 }
 

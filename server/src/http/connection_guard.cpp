@@ -376,7 +376,7 @@ void GuardedServer::refuse(socket_t sock, const std::string& address) {
   std::fprintf(stderr, "connection from %s refused: %d connections from that address already open\n", address.c_str(),
                registry_.maxPerAddress());
   httplib::Response res;
-  sendError(res, 503, "too_many_connections",
+  sendError(res, ErrorCode::TooManyConnections,
             "this address already has " + std::to_string(registry_.maxPerAddress()) +
                 " connections open (--max-connections-per-address); close some and retry");
   res.set_header("Connection", "close");

@@ -4,53 +4,6 @@
 
 namespace brdfa::server {
 
-int httpStatusFor(ErrorCode code) {
-  switch (code) {
-    case ErrorCode::InvalidArgument:
-      return 400;
-    case ErrorCode::NotFound:
-      return 404;
-    case ErrorCode::CompileError:
-      return 422;
-    // A valid request this build or device cannot do is still the client's to change.
-    case ErrorCode::Unsupported:
-      return 400;
-    // The device is a shared resource that may come back (or the server gets restarted).
-    case ErrorCode::DeviceError:
-      return 503;
-    case ErrorCode::OverBudget:
-      return 507;
-    // The program itself is what a watchdog stopped: the client's to change.
-    case ErrorCode::RenderBudget:
-      return 422;
-    case ErrorCode::Internal:
-      return 500;
-  }
-  return 500;
-}
-
-const char* errorName(ErrorCode code) {
-  switch (code) {
-    case ErrorCode::InvalidArgument:
-      return "invalid_argument";
-    case ErrorCode::NotFound:
-      return "not_found";
-    case ErrorCode::CompileError:
-      return "compile_error";
-    case ErrorCode::Unsupported:
-      return "unsupported";
-    case ErrorCode::DeviceError:
-      return "device_error";
-    case ErrorCode::OverBudget:
-      return "memory_budget";
-    case ErrorCode::RenderBudget:
-      return "render_budget";
-    case ErrorCode::Internal:
-      return "internal";
-  }
-  return "internal";
-}
-
 const char* errorNameForStatus(int status) {
   switch (status) {
     case 400:
@@ -90,9 +43,10 @@ nlohmann::json diagnosticsToJson(const std::vector<Diagnostic>& ds) {
 
 void sendQuotaExceeded(httplib::Response& res, const std::string& quota, uint64_t limit, uint64_t used,
                        const std::string& message) {
-  res.set_header(kErrorNameHeader, "quota_exceeded");
-  sendJson(res, {{"error", "quota_exceeded"}, {"quota", quota}, {"limit", limit}, {"used", used}, {"message", message}},
-           429);
+  const char* name = errorCodeName(ErrorCode::QuotaExceeded);
+  res.set_header(kErrorNameHeader, name);
+  sendJson(res, {{"error", name}, {"quota", quota}, {"limit", limit}, {"used", used}, {"message", message}},
+           errorHttpStatus(ErrorCode::QuotaExceeded));
 }
 
 void sendJson(httplib::Response& res, const nlohmann::json& body, int status) {
@@ -101,21 +55,35 @@ void sendJson(httplib::Response& res, const nlohmann::json& body, int status) {
   sendBody(res, body.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace), "application/json");
 }
 
-void sendError(httplib::Response& res, int status, const std::string& code, const std::string& message,
-               const std::string& field) {
-  nlohmann::json body{{"error", code}, {"message", message}};
+namespace {
+
+// The error body every failure gets, under `status`.
+void sendErrorBody(httplib::Response& res, int status, const char* name, const std::string& message,
+                   const std::string& field) {
+  nlohmann::json body{{"error", name}, {"message", message}};
   if (!field.empty()) body["field"] = field;
-  res.set_header(kErrorNameHeader, code);
+  res.set_header(kErrorNameHeader, name);
   sendJson(res, body, status);
 }
 
+}  // namespace
+
 void sendError(httplib::Response& res, const Error& error) {
-  nlohmann::json body{{"error", errorName(error.code)}, {"message", error.message}};
+  const char* name = errorCodeName(error.code);
+  nlohmann::json body{{"error", name}, {"message", error.message}};
   if (!error.field.empty()) body["field"] = error.field;
-  res.set_header(kErrorNameHeader, errorName(error.code));
+  res.set_header(kErrorNameHeader, name);
   if (error.code == ErrorCode::CompileError || !error.diagnostics.empty())
     body["diagnostics"] = diagnosticsToJson(error.diagnostics);
-  sendJson(res, body, httpStatusFor(error.code));
+  sendJson(res, body, errorHttpStatus(error.code));
+}
+
+void sendError(httplib::Response& res, ErrorCode code, std::string message, std::string field) {
+  sendErrorBody(res, errorHttpStatus(code), errorCodeName(code), message, field);
+}
+
+void sendStatusError(httplib::Response& res, const std::string& message) {
+  sendErrorBody(res, res.status, errorNameForStatus(res.status), message, {});
 }
 
 }  // namespace brdfa::server

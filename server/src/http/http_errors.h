@@ -12,25 +12,22 @@
 
 namespace brdfa::server {
 
-// HTTP status for a renderer/server error code.
-int httpStatusFor(ErrorCode code);
-
-// Snake-case name used as "error" in bodies ("invalid_argument", "compile_error", ...).
-const char* errorName(ErrorCode code);
-
 nlohmann::json diagnosticToJson(const Diagnostic& d);
 nlohmann::json diagnosticsToJson(const std::vector<Diagnostic>& ds);
 
 // Both sendError overloads also put the error's name in this header, for /metrics' rejections
-// by reason; the post-routing handler (routes_system.cpp) takes it off before the response goes.
+// by reason; the post-routing handler (api/system.cpp) takes it off before the response goes.
 inline constexpr const char* kErrorNameHeader = "X-Brdfa-Error-Name";
 
-// Writes `error` as the JSON body with its mapped status.
+// Writes `error` as the JSON body, with the status and "error" name of its code (errorHttpStatus
+// and errorCodeName in brdfa/result.h: the one table of codes).
 void sendError(httplib::Response& res, const Error& error);
+// The same for an error made here: sendError(res, ErrorCode::NotFound, "no session 'x'", "session").
+void sendError(httplib::Response& res, ErrorCode code, std::string message, std::string field = {});
 
-// Writes an error that has no brdfa::ErrorCode (bad_json, conflict, payload_too_large, ...).
-void sendError(httplib::Response& res, int status, const std::string& code, const std::string& message,
-               const std::string& field = {});
+// For a response httplib made by itself (its res.status: an unknown route, 405, 413, 414, ...):
+// the JSON error body, named by errorNameForStatus.
+void sendStatusError(httplib::Response& res, const std::string& message);
 
 // 429 quota_exceeded: one person is past one of their quotas (config.h's Quotas); `message`
 // says how to free room. {"error", "quota", "limit", "used", "message"}.
@@ -39,8 +36,8 @@ void sendQuotaExceeded(httplib::Response& res, const std::string& quota, uint64_
 
 void sendJson(httplib::Response& res, const nlohmann::json& body, int status = 200);
 
-// Default "error" code for a bare HTTP status (used by the error handler for responses that
-// httplib produced itself, e.g. 413 or 404 for unknown routes).
+// Default "error" name for a bare HTTP status (for responses that httplib produced itself, e.g.
+// 413 or 404 for unknown routes).
 const char* errorNameForStatus(int status);
 
 }  // namespace brdfa::server

@@ -214,7 +214,7 @@ std::optional<json> JobManager::describe(const std::string& id) const {
                {"request", job->request}};
       if (job->result) out["result"] = *job->result;
       if (job->error) {
-        out["error"] = {{"error", errorName(job->error->code)}, {"message", job->error->message}};
+        out["error"] = {{"error", errorCodeName(job->error->code)}, {"message", job->error->message}};
         if (!job->error->field.empty()) out["error"]["field"] = job->error->field;
         if (!job->error->diagnostics.empty()) out["error"]["diagnostics"] = diagnosticsToJson(job->error->diagnostics);
       }
@@ -322,7 +322,7 @@ json JobManager::runItem(const JobItem& item) {
     // The check could not run (Unsupported for a legacy render() file, rendered but never
     // analysed): reported, and not held against the BRDF unless it found a compile error.
     const Error& e = checked.error();
-    out["checks"] = {{"error", errorName(e.code)}, {"message", e.message}};
+    out["checks"] = {{"error", errorCodeName(e.code)}, {"message", e.message}};
     log.push_back("check: " + e.message);
     if (e.code == ErrorCode::CompileError) {
       ok = false;

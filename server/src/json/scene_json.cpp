@@ -119,21 +119,15 @@ Result<void> optionalField(const json& obj, const char* key, const std::string& 
   return {};
 }
 
-#define BRDFA_CHECK(expr)                                       \
-  do {                                                          \
-    auto brdfaCheckResult = (expr);                             \
-    if (!brdfaCheckResult) return brdfaCheckResult.takeError(); \
-  } while (0)
-
 Result<void> parseCamera(const json& j, Camera& cam) {
-  BRDFA_CHECK(checkObject(j, "camera"));
-  BRDFA_CHECK(checkKeys(j, "camera", {"position", "yaw", "pitch", "fov"}));
-  BRDFA_CHECK(optionalField(j, "position", "camera", cam.position,
-                            [](const json& v, const std::string& f) { return readVec3(v, f, -kAbsurd, kAbsurd); }));
-  BRDFA_CHECK(optionalField(j, "yaw", "camera", cam.yaw,
-                            [](const json& v, const std::string& f) { return readFloat(v, f, -kAbsurd, kAbsurd); }));
-  BRDFA_CHECK(optionalField(j, "pitch", "camera", cam.pitch,
-                            [](const json& v, const std::string& f) { return readFloat(v, f, -kAbsurd, kAbsurd); }));
+  BRDFA_TRY(checkObject(j, "camera"));
+  BRDFA_TRY(checkKeys(j, "camera", {"position", "yaw", "pitch", "fov"}));
+  BRDFA_TRY(optionalField(j, "position", "camera", cam.position,
+                          [](const json& v, const std::string& f) { return readVec3(v, f, -kAbsurd, kAbsurd); }));
+  BRDFA_TRY(optionalField(j, "yaw", "camera", cam.yaw,
+                          [](const json& v, const std::string& f) { return readFloat(v, f, -kAbsurd, kAbsurd); }));
+  BRDFA_TRY(optionalField(j, "pitch", "camera", cam.pitch,
+                          [](const json& v, const std::string& f) { return readFloat(v, f, -kAbsurd, kAbsurd); }));
   // Clamped, not refused: mouse-look overshoots, and at +-90 degrees the view's up vector is
   // undefined. The scene then reports the pitch it renders with.
   cam.pitch = std::clamp(cam.pitch, -kMaxPitch, kMaxPitch);
@@ -161,14 +155,14 @@ std::string joinNames(const std::vector<std::string>& names) {
 }
 
 Result<void> parseEnvironment(const json& j, EnvironmentSettings& env) {
-  BRDFA_CHECK(checkObject(j, "environment"));
-  BRDFA_CHECK(checkKeys(j, "environment", {"name", "intensity", "rotation", "visible"}));
-  BRDFA_CHECK(optionalField(j, "name", "environment", env.name, readString));
-  BRDFA_CHECK(optionalField(j, "intensity", "environment", env.intensity,
-                            [](const json& v, const std::string& f) { return readFloat(v, f, 0, kAbsurd); }));
-  BRDFA_CHECK(optionalField(j, "rotation", "environment", env.rotation,
-                            [](const json& v, const std::string& f) { return readFloat(v, f, -kAbsurd, kAbsurd); }));
-  BRDFA_CHECK(optionalField(j, "visible", "environment", env.visible, readBool));
+  BRDFA_TRY(checkObject(j, "environment"));
+  BRDFA_TRY(checkKeys(j, "environment", {"name", "intensity", "rotation", "visible"}));
+  BRDFA_TRY(optionalField(j, "name", "environment", env.name, readString));
+  BRDFA_TRY(optionalField(j, "intensity", "environment", env.intensity,
+                          [](const json& v, const std::string& f) { return readFloat(v, f, 0, kAbsurd); }));
+  BRDFA_TRY(optionalField(j, "rotation", "environment", env.rotation,
+                          [](const json& v, const std::string& f) { return readFloat(v, f, -kAbsurd, kAbsurd); }));
+  BRDFA_TRY(optionalField(j, "visible", "environment", env.visible, readBool));
   return {};
 }
 
@@ -216,14 +210,14 @@ Result<std::vector<TextureBinding>> readTextures(const json& j, const std::strin
     if (j[i].is_string()) {
       t.name = j[i].get<std::string>();
     } else {
-      BRDFA_CHECK(checkObject(j[i], at));
-      BRDFA_CHECK(checkKeys(j[i], at, {"name", "srgb"}));
+      BRDFA_TRY(checkObject(j[i], at));
+      BRDFA_TRY(checkKeys(j[i], at, {"name", "srgb"}));
       auto name = j[i].find("name");
       if (name == j[i].end()) return invalid(at + ".name", "required");
       Result<std::string> n = readString(*name, at + ".name");
       if (!n) return n.takeError();
       t.name = n.value();
-      BRDFA_CHECK(optionalField(j[i], "srgb", at, t.srgb, readBool));
+      BRDFA_TRY(optionalField(j[i], "srgb", at, t.srgb, readBool));
     }
     out.push_back(std::move(t));
   }
@@ -256,19 +250,19 @@ Vec3 clampParam(const BrdfParam& p, Vec3 value, const std::string& field, const 
 Result<SceneObject> parseObject(const json& j, const std::string& prefix, const SceneResolver& r,
                                 std::vector<std::string>* notes) {
   SceneObject obj;
-  BRDFA_CHECK(checkObject(j, prefix));
-  BRDFA_CHECK(checkKeys(j, prefix, {"mesh", "brdf", "params", "translate", "rotate", "scale", "textures"}));
-  BRDFA_CHECK(optionalField(j, "mesh", prefix, obj.mesh, readString));
+  BRDFA_TRY(checkObject(j, prefix));
+  BRDFA_TRY(checkKeys(j, prefix, {"mesh", "brdf", "params", "translate", "rotate", "scale", "textures"}));
+  BRDFA_TRY(optionalField(j, "mesh", prefix, obj.mesh, readString));
   std::string brdfName = kDefaultBrdf;
-  BRDFA_CHECK(optionalField(j, "brdf", prefix, brdfName, readString));
-  BRDFA_CHECK(optionalField(j, "translate", prefix, obj.translate,
-                            [](const json& v, const std::string& f) { return readVec3(v, f, -kAbsurd, kAbsurd); }));
-  BRDFA_CHECK(optionalField(j, "rotate", prefix, obj.rotate,
-                            [](const json& v, const std::string& f) { return readVec3(v, f, -kAbsurd, kAbsurd); }));
+  BRDFA_TRY(optionalField(j, "brdf", prefix, brdfName, readString));
+  BRDFA_TRY(optionalField(j, "translate", prefix, obj.translate,
+                          [](const json& v, const std::string& f) { return readVec3(v, f, -kAbsurd, kAbsurd); }));
+  BRDFA_TRY(optionalField(j, "rotate", prefix, obj.rotate,
+                          [](const json& v, const std::string& f) { return readVec3(v, f, -kAbsurd, kAbsurd); }));
   // Positive only: a zero scale is degenerate and a negative one mirrors the mesh (flipped
   // winding and normals), which nothing here needs.
-  BRDFA_CHECK(optionalField(j, "scale", prefix, obj.scale,
-                            [](const json& v, const std::string& f) { return readVec3(v, f, 1e-6, kAbsurd); }));
+  BRDFA_TRY(optionalField(j, "scale", prefix, obj.scale,
+                          [](const json& v, const std::string& f) { return readVec3(v, f, 1e-6, kAbsurd); }));
   if (auto it = j.find("textures"); it != j.end()) {
     Result<std::vector<TextureBinding>> textures = readTextures(*it, prefix + ".textures");
     if (!textures) return textures.takeError();
@@ -277,7 +271,7 @@ Result<SceneObject> parseObject(const json& j, const std::string& prefix, const 
   // Type problems are reported before unknown names, so one request gets the 400 first.
   const json* params = nullptr;
   if (auto it = j.find("params"); it != j.end()) {
-    BRDFA_CHECK(checkObject(*it, prefix + ".params"));
+    BRDFA_TRY(checkObject(*it, prefix + ".params"));
     params = &*it;
   }
 
@@ -311,16 +305,17 @@ Result<SceneObject> parseObject(const json& j, const std::string& prefix, const 
 }
 
 Result<void> parseRender(const json& j, RenderSettings& rs) {
-  BRDFA_CHECK(checkObject(j, "render"));
-  BRDFA_CHECK(checkKeys(j, "render", {"width", "height", "samples_per_frame", "max_samples", "sampling", "target_error",
-                                      "seed", "exposure", "tonemap"}));
+  BRDFA_TRY(checkObject(j, "render"));
+  BRDFA_TRY(checkKeys(j, "render",
+                      {"width", "height", "samples_per_frame", "max_samples", "sampling", "target_error", "seed",
+                       "exposure", "tonemap"}));
   auto intIn = [](long long lo, long long hi) {
     return [lo, hi](const json& v, const std::string& f) { return readInt(v, f, lo, hi); };
   };
-  BRDFA_CHECK(optionalField(j, "width", "render", rs.width, intIn(kMinImageSize, kMaxImageSize)));
-  BRDFA_CHECK(optionalField(j, "height", "render", rs.height, intIn(kMinImageSize, kMaxImageSize)));
-  BRDFA_CHECK(optionalField(j, "samples_per_frame", "render", rs.samplesPerFrame, intIn(1, kMaxSamplesPerFrame)));
-  BRDFA_CHECK(optionalField(j, "max_samples", "render", rs.maxSamples, intIn(1, kMaxTotalSamples)));
+  BRDFA_TRY(optionalField(j, "width", "render", rs.width, intIn(kMinImageSize, kMaxImageSize)));
+  BRDFA_TRY(optionalField(j, "height", "render", rs.height, intIn(kMinImageSize, kMaxImageSize)));
+  BRDFA_TRY(optionalField(j, "samples_per_frame", "render", rs.samplesPerFrame, intIn(1, kMaxSamplesPerFrame)));
+  BRDFA_TRY(optionalField(j, "max_samples", "render", rs.maxSamples, intIn(1, kMaxTotalSamples)));
   if (auto it = j.find("sampling"); it != j.end()) {
     Result<std::string> s = readString(*it, "render.sampling");
     if (!s) return s.takeError();
@@ -342,8 +337,8 @@ Result<void> parseRender(const json& j, RenderSettings& rs) {
     if (!seed) return seed.takeError();
     rs.seed = static_cast<uint32_t>(seed.value());
   }
-  BRDFA_CHECK(optionalField(j, "exposure", "render", rs.exposure,
-                            [](const json& v, const std::string& f) { return readFloat(v, f, -40, 40); }));
+  BRDFA_TRY(optionalField(j, "exposure", "render", rs.exposure,
+                          [](const json& v, const std::string& f) { return readFloat(v, f, -40, 40); }));
   if (auto it = j.find("tonemap"); it != j.end()) {
     Result<std::string> s = readString(*it, "render.tonemap");
     if (!s) return s.takeError();
@@ -362,13 +357,13 @@ Result<Vec3> paramValueFromJson(const BrdfParam& param, const json& value, const
 Result<Scene> sceneFromJson(const json& j, const SceneResolver& r, std::vector<std::string>* notes) {
   Scene scene;
   if (!j.is_object()) return invalid("scene", std::string("a scene is a JSON object, got ") + typeName(j));
-  BRDFA_CHECK(checkKeys(j, "", {"camera", "environment", "objects", "render", "notes"}));
+  BRDFA_TRY(checkKeys(j, "", {"camera", "environment", "objects", "render", "notes"}));
   // Shapes and ranges of every section first, then names: a request with a typo and an unknown
   // name gets the 400 for the typo.
-  if (auto it = j.find("camera"); it != j.end()) BRDFA_CHECK(parseCamera(*it, scene.camera));
-  if (auto it = j.find("environment"); it != j.end()) BRDFA_CHECK(parseEnvironment(*it, scene.environment));
-  if (auto it = j.find("render"); it != j.end()) BRDFA_CHECK(parseRender(*it, scene.render));
-  BRDFA_CHECK(checkEnvironmentName(scene.environment, r));
+  if (auto it = j.find("camera"); it != j.end()) BRDFA_TRY(parseCamera(*it, scene.camera));
+  if (auto it = j.find("environment"); it != j.end()) BRDFA_TRY(parseEnvironment(*it, scene.environment));
+  if (auto it = j.find("render"); it != j.end()) BRDFA_TRY(parseRender(*it, scene.render));
+  BRDFA_TRY(checkEnvironmentName(scene.environment, r));
 
   if (auto it = j.find("objects"); it != j.end()) {
     if (!it->is_array()) return invalid("objects", std::string("expected an array, got ") + typeName(*it));
@@ -440,7 +435,7 @@ Result<std::map<std::string, Vec3>> paramsFromJson(const BrdfDefinition& brdf, c
   std::map<std::string, Vec3> out;
   for (const BrdfParam& p : brdf.params) out[p.name] = p.defaultValue;
   if (!params) return out;
-  BRDFA_CHECK(checkObject(*params, field));
+  BRDFA_TRY(checkObject(*params, field));
   for (auto it = params->begin(); it != params->end(); ++it) {
     std::string at = field + "." + it.key();
     const BrdfParam* p = brdf.findParam(it.key());

@@ -269,8 +269,7 @@ Result<bool> BrdfLibrary::setShared(std::string_view name, bool shared) {
   }
   const std::string marker = sharedMarkerPath(name);
   if (shared) {
-    Result<void> written = writeFileAtomically(marker, "");
-    if (!written) return written.takeError();
+    BRDFA_TRY(writeFileAtomically(marker, ""));
   } else if (Result<void> removed = removeFileDurably(marker); !removed && removed.error().code != ErrorCode::NotFound) {
     return removed.takeError();
   }
