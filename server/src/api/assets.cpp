@@ -144,9 +144,10 @@ void uploadAsset(Service& service, const httplib::Request& req, httplib::Respons
   AssetQuotaHit hit;
   Result<AssetRecord> added = service.assets->add(upload, rejection, owner, &hit);
   if (rejection == AssetRejection::QuotaExceeded)
-    return sendQuotaExceeded(res, hit.quota, hit.limit, hit.used,
+    return sendQuotaExceeded(res, uploadQuotaName(hit.quota), hit.limit, hit.used,
                              added.error().message + " (--quota-" +
-                                 (hit.quota == "uploads" ? "uploads " : "upload-bytes ") + std::to_string(hit.limit) +
+                                 (hit.quota == UploadQuota::Uploads ? "uploads " : "upload-bytes ") +
+                                 std::to_string(hit.limit) +
                                  "); delete one of yours (DELETE /api/assets/{id})");
   if (!added) return sendRejection(res, added.error(), rejection);
   res.set_header("Location", "/api/assets/" + added->id);
@@ -184,7 +185,7 @@ void deleteAsset(Service& service, const httplib::Request& req, httplib::Respons
   std::optional<AssetRecord> found = service.assets->find(id);
   if (!found || !assetReadable(who, *found))
     return sendError(res, ErrorCode::NotFound, "no asset '" + id.substr(0, 128) + "'", "id");
-  if (found->source != "upload")
+  if (found->source != AssetSource::Upload)
     return sendError(res, ErrorCode::Conflict, "asset '" + id + "' is built in and cannot be deleted", "id");
   if (!canDelete(who, found->owner))
     return sendError(res, ErrorCode::Forbidden, "only its uploader or the teacher deletes asset '" + id + "'", "id");

@@ -167,9 +167,9 @@ void registerUserRoutes(httplib::Server& server, Service& service) {
     Role role = Role::Student;
     if (body->contains("role")) {
       const nlohmann::json& r = (*body)["role"];
-      if (r != "student" && r != "teacher")
-        return sendError(res, ErrorCode::InvalidArgument, "role is \"student\" or \"teacher\"", "role");
-      role = r == "teacher" ? Role::Teacher : Role::Student;
+      std::optional<Role> named = r.is_string() ? roleFromName(r.get<std::string>()) : std::nullopt;
+      if (!named) return sendError(res, ErrorCode::InvalidArgument, "role is \"student\" or \"teacher\"", "role");
+      role = *named;
     }
     if (users->listUsers().size() >= kMaxUsers)
       return sendError(res, ErrorCode::StorageFull, "the class has " + std::to_string(kMaxUsers) + " users already");

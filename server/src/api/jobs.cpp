@@ -122,7 +122,7 @@ void registerJobRoutes(httplib::Server& server, Service& service) {
       return runConvergenceJob(*renderer, spec, context);
     };
     const JobOwner owner = jobOwner(service, who);
-    JobSubmitted submitted = service.jobs->submitRunner("convergence", request, std::move(run), owner);
+    JobSubmitted submitted = service.jobs->submitRunner(JobKind::Convergence, request, std::move(run), owner);
     if (!submitted.id)
       return sendJobRefusal(res, submitted, owner,
                             "at most " + std::to_string(kMaxOpenRunnerJobs) +
@@ -130,7 +130,7 @@ void registerJobRoutes(httplib::Server& server, Service& service) {
                                 " jobs are kept); try later or cancel one");
     request.erase("scene");
     request["id"] = *submitted.id;
-    request["kind"] = "convergence";
+    request["kind"] = jobKindName(JobKind::Convergence);
     sendJson(res, request, 202);
   });
 

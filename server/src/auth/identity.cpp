@@ -8,6 +8,12 @@ namespace brdfa::server {
 
 const char* roleName(Role role) { return role == Role::Teacher ? "teacher" : "student"; }
 
+std::optional<Role> roleFromName(std::string_view name) {
+  if (name == roleName(Role::Teacher)) return Role::Teacher;
+  if (name == roleName(Role::Student)) return Role::Student;
+  return std::nullopt;
+}
+
 Identity localIdentity() { return Identity{}; }
 
 namespace {

@@ -2,6 +2,7 @@
 // every route applies (docs/api.md, Identities and ownership).
 #pragma once
 
+#include <optional>
 #include <string>
 #include <string_view>
 
@@ -11,6 +12,8 @@ namespace brdfa::server {
 
 enum class Role { Student, Teacher };
 const char* roleName(Role role);  // "student", "teacher"
+// The role of that name; nullopt for any other text.
+std::optional<Role> roleFromName(std::string_view name);
 
 // The person a request acts for. In `none` mode every request is the nameless teacher, and
 // every thing is owned by "" (nobody): the single-user service as it was before identities.

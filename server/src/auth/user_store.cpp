@@ -44,7 +44,7 @@ std::optional<UserRecord> userFromJson(const json& j) {
   r.user = stringField(j, "user");
   if (!isValidUserName(r.user)) return std::nullopt;
   r.displayName = stringField(j, "display_name");
-  r.role = stringField(j, "role") == "teacher" ? Role::Teacher : Role::Student;
+  r.role = roleFromName(stringField(j, "role")).value_or(Role::Student);
   r.createdAt = stringField(j, "created_at");
   return r;
 }

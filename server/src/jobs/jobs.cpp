@@ -52,6 +52,8 @@ class JobManager::Context : public JobContext {
   Job& job_;
 };
 
+const char* jobKindName(JobKind kind) { return kind == JobKind::Convergence ? "convergence" : "validate"; }
+
 JobManager::JobManager(std::shared_ptr<Renderer> renderer, int workers, std::string idPrefix)
     : renderer_(std::move(renderer)), idPrefix_(std::move(idPrefix)) {
   for (int i = 0; i < workers; ++i) workers_.emplace_back([this] { workerLoop(); });
@@ -102,11 +104,11 @@ std::optional<std::string> JobManager::ownerOf(const std::string& id) const {
   return std::nullopt;
 }
 
-JobSubmitted JobManager::submitRunner(std::string kind, json request, JobRunner run, const JobOwner& owner) {
+JobSubmitted JobManager::submitRunner(JobKind kind, json request, JobRunner run, const JobOwner& owner) {
   JobSubmitted out;
   auto job = std::make_shared<Job>();
   job->owner = owner.user;
-  job->kind = std::move(kind);
+  job->kind = kind;
   job->request = std::move(request);
   job->runner = std::move(run);
   {
@@ -210,7 +212,7 @@ std::optional<json> JobManager::describe(const std::string& id) const {
                           : job->error   ? "failed"
                           : job->running ? "running"
                                          : "queued";
-      json out{{"id", job->id}, {"kind", job->kind}, {"state", state}, {"progress", job->progress},
+      json out{{"id", job->id}, {"kind", jobKindName(job->kind)}, {"state", state}, {"progress", job->progress},
                {"request", job->request}};
       if (job->result) out["result"] = *job->result;
       if (job->error) {
@@ -229,7 +231,7 @@ std::optional<json> JobManager::describe(const std::string& id) const {
     for (const auto& r : job->results)
       if (r) results.push_back(*r);
     return json{{"id", job->id},
-                {"kind", job->kind},
+                {"kind", jobKindName(job->kind)},
                 {"state", state},
                 {"progress", total == 0 ? 1.0 : static_cast<double>(job->finished) / static_cast<double>(total)},
                 {"total", total},

@@ -60,6 +60,10 @@ struct JobSubmitted {
   size_t ownerOpen = 0;    // with quotaFull: how many
 };
 
+// What a job does: a batch test of BRDFs, or a convergence comparison (one-piece).
+enum class JobKind { Validate, Convergence };
+const char* jobKindName(JobKind kind);  // "validate", "convergence": the job's "kind"
+
 class JobManager {
  public:
   // Job ids are idPrefix + "job-<n>" (a replica's "<tag>.", config.h).
@@ -69,10 +73,10 @@ class JobManager {
   // Queues a batch test; no id when kMaxJobs jobs are all unfinished or the owner is at their limit.
   JobSubmitted submit(std::vector<JobItem> items, const JobOwner& owner = {});
 
-  // Queues a one-piece job of `kind` ("convergence"); `request` is echoed by describe(). No id
+  // Queues a one-piece job of `kind`; `request` is echoed by describe(). No id
   // when kMaxOpenRunnerJobs such jobs are queued or running, kMaxJobs are all unfinished, or the
   // owner is at their limit.
-  JobSubmitted submitRunner(std::string kind, nlohmann::json request, JobRunner run, const JobOwner& owner = {});
+  JobSubmitted submitRunner(JobKind kind, nlohmann::json request, JobRunner run, const JobOwner& owner = {});
   // The owner of a job (JobOwner::user); nullopt for unknown ids.
   std::optional<std::string> ownerOf(const std::string& id) const;
 
@@ -96,7 +100,7 @@ class JobManager {
   struct Job {
     std::string id;
     std::string owner;
-    std::string kind = "validate";
+    JobKind kind = JobKind::Validate;
     std::vector<JobItem> items;
     std::vector<std::optional<nlohmann::json>> results;
     size_t started = 0;

@@ -24,9 +24,6 @@ using nlohmann::json;
 
 namespace {
 
-constexpr const char* kSourceBuiltin = "builtin";
-constexpr const char* kSourceBlender = "blender-data";
-constexpr const char* kSourceUpload = "upload";
 constexpr size_t kMaxDisplayName = 128;
 constexpr size_t kMaxMetadataBytes = 64 * 1024;
 constexpr std::chrono::seconds kInspectSlotWait{30};
@@ -171,7 +168,7 @@ std::optional<AssetRecord> recordFromMetadata(const json& j, const std::string& 
   if (!j.is_object()) return why = "metadata is not a JSON object", std::nullopt;
   AssetRecord r;
   r.id = id;
-  r.source = kSourceUpload;
+  r.source = AssetSource::Upload;
   auto storedId = str("id");
   auto kind = str("kind");
   auto format = str("format");
@@ -194,6 +191,19 @@ std::optional<AssetRecord> recordFromMetadata(const json& j, const std::string& 
 
 }  // namespace
 
+const char* assetSourceName(AssetSource source) {
+  switch (source) {
+    case AssetSource::Builtin: return "builtin";
+    case AssetSource::Blender: return "blender-data";
+    case AssetSource::Upload: return "upload";
+  }
+  return "upload";
+}
+
+const char* uploadQuotaName(UploadQuota quota) {
+  return quota == UploadQuota::Uploads ? "uploads" : "upload_bytes";
+}
+
 const char* assetRejectionName(AssetRejection reason) {
   switch (reason) {
     case AssetRejection::None: return "none";
@@ -212,18 +222,21 @@ const char* assetRejectionName(AssetRejection reason) {
 }
 
 json assetToJson(const AssetRecord& r) {
-  json j{{"id", r.id}, {"kind", assetKindName(r.kind)}, {"builtin", r.source != kSourceUpload}, {"source", r.source}};
-  if (r.source == kSourceBuiltin) {
+  json j{{"id", r.id},
+         {"kind", assetKindName(r.kind)},
+         {"builtin", r.source != AssetSource::Upload},
+         {"source", assetSourceName(r.source)}};
+  if (r.source == AssetSource::Builtin) {
     j["name"] = r.id;
     return j;
   }
-  j["name"] = r.source == kSourceUpload ? r.name : r.id;
+  j["name"] = r.source == AssetSource::Upload ? r.name : r.id;
   j["format"] = r.format ? json(assetFormatName(*r.format)) : json(nullptr);
   j["layout"] = r.layout.empty() ? json(nullptr) : json(r.layout);
   j["bytes"] = r.bytes;
   j["width"] = r.width;
   j["height"] = r.height;
-  if (r.source == kSourceUpload) {
+  if (r.source == AssetSource::Upload) {
     j["vertices"] = r.vertices;
     j["triangles"] = r.triangles;
     j["created"] = r.created;
@@ -342,7 +355,7 @@ void AssetStore::loadEnvironmentDir(const std::string& dir, std::vector<std::str
     AssetRecord rec;
     rec.id = name;
     rec.kind = AssetKind::Environment;
-    rec.source = kSourceBlender;
+    rec.source = AssetSource::Blender;
     rec.format = AssetFormat::Exr;
     rec.layout = "equirect";
     rec.bytes = bytes->size();
@@ -463,14 +476,15 @@ std::optional<Error> AssetStore::refuseWithoutRoom(const AssetUpload& up, const 
       if (r.owner == owner.user) ++count, bytes += r.bytes;
     AssetQuotaHit hit;
     bool over = true;
-    if (owner.maxUploads > 0 && count >= owner.maxUploads) hit = {"uploads", owner.maxUploads, count};
-    else if (owner.maxBytes > 0 && bytes + up.size > owner.maxBytes) hit = {"upload_bytes", owner.maxBytes, bytes};
+    if (owner.maxUploads > 0 && count >= owner.maxUploads) hit = {UploadQuota::Uploads, owner.maxUploads, count};
+    else if (owner.maxBytes > 0 && bytes + up.size > owner.maxBytes)
+      hit = {UploadQuota::UploadBytes, owner.maxBytes, bytes};
     else
       over = false;
     if (over) {
       if (quotaHit) *quotaHit = hit;
       return refuseUpload(rejection, AssetRejection::QuotaExceeded,
-                          hit.quota == "uploads"
+                          hit.quota == UploadQuota::Uploads
                               ? "you keep " + std::to_string(count) + " uploads, the most one person may"
                               : "your uploads hold " + std::to_string(bytes) + " bytes; with this file's " +
                                     std::to_string(up.size) + " they would pass your " +
@@ -550,7 +564,7 @@ Result<AssetRecord> AssetStore::add(const AssetUpload& up, AssetRejection& rejec
 
   AssetRecord rec;
   rec.kind = kind;
-  rec.source = kSourceUpload;
+  rec.source = AssetSource::Upload;
   rec.format = info->format;
   rec.layout = info->layout;
   rec.name = claims->displayName;
@@ -635,7 +649,7 @@ std::vector<AssetRecord> AssetStore::list(std::optional<AssetKind> kind) const {
       AssetRecord r;
       r.id = n;
       r.kind = k;
-      r.source = kSourceBuiltin;
+      r.source = AssetSource::Builtin;
       out.push_back(std::move(r));
     }
     for (const auto& [name, r] : blender_)

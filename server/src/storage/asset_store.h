@@ -65,18 +65,24 @@ struct AssetOwner {
   uint64_t maxBytes = 0;
 };
 
-// Which per-person limit an upload hit, for the 429 (quota "uploads" or "upload_bytes").
+// Which per-person limit an upload hit, for the 429.
+enum class UploadQuota { Uploads, UploadBytes };
+const char* uploadQuotaName(UploadQuota quota);  // "uploads", "upload_bytes": the 429's `quota`
 struct AssetQuotaHit {
-  std::string quota;
+  UploadQuota quota = UploadQuota::Uploads;
   uint64_t limit = 0, used = 0;
 };
 const char* assetRejectionName(AssetRejection reason);  // "empty", "too_large", ...
 
-// What is known of one asset; `source` is "builtin", "blender-data" or "upload".
+// Where an asset comes from: the renderer's built-ins, Debian blender-data's worlds, an upload.
+enum class AssetSource { Builtin, Blender, Upload };
+const char* assetSourceName(AssetSource source);  // "builtin", "blender-data", "upload"
+
+// What is known of one asset.
 struct AssetRecord {
   std::string id;
   AssetKind kind = AssetKind::Mesh;
-  std::string source;
+  AssetSource source = AssetSource::Upload;
   std::optional<AssetFormat> format;  // unknown for built-ins
   std::string layout;                 // environments: "equirect" | "cross"
   std::string name;                   // uploads: the sanitized original file name
