@@ -1,5 +1,5 @@
 // The BRDF library over REST: list, read, compile-and-save, share, delete, validate (presets:
-// routes_presets.cpp).
+// api/presets.cpp).
 #include <algorithm>
 
 #include "api/brdf_access.h"

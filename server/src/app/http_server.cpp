@@ -46,7 +46,7 @@ Result<std::unique_ptr<HttpServer>> HttpServer::create(const ServerConfig& confi
     int yes = 1;
     ::setsockopt(sock, SOL_SOCKET, SO_REUSEADDR, &yes, sizeof(yes));
     // Inherited by accepted sockets: a response's header and body writes go out at once,
-    // instead of the body waiting for the client's delayed ACK of the header (40 ms a request).
+    // instead of the body waiting for the client's delayed ACK of the header on every request.
     ::setsockopt(sock, IPPROTO_TCP, TCP_NODELAY, &yes, sizeof(yes));
   });
 

@@ -41,7 +41,7 @@ inline constexpr int kConvergenceMaxReferenceMs = 240000;  // the reference
 inline constexpr int kConvergenceDefaultMs = 2000;
 inline constexpr int kConvergenceCheckpoints = 16;
 // Largest image a comparison renders (each mode has a view of its own: 48 bytes per pixel and
-// G-buffer slice), and the most samples one of its passes takes in all (~16 ms on lavapipe).
+// G-buffer slice), and the most samples one of its passes takes in all (a short pass on a CPU device).
 inline constexpr int kConvergenceMaxPixels = 1024 * 1024;
 inline constexpr int kConvergenceSamplesPerPass = 1 << 20;
 

@@ -79,8 +79,8 @@ Result<std::unique_ptr<Service>> Service::create(const ServerConfig& config, std
   service->memoryBudgetBytes = budget;
   service->uploadMemory = std::make_unique<RenderSlots>(uploadShare, kMaxQueuedUploadChecks);
   options.memoryBudgetBytes = budget - uploadShare;
-  // A compile's memory is part of the budget: a sixteenth of it, unless told (64 MiB is ~2x what
-  // glslang needs for Disney's BRDF with the integrator).
+  // A compile's memory is part of the budget: a sixteenth of it, unless told (the floor leaves
+  // glslang room for Disney's BRDF with the integrator).
   options.compileMemoryMiB = config.compileMemoryMiB > 0 ? size_t(config.compileMemoryMiB)
                                                          : size_t(std::clamp<uint64_t>(budget >> 24, 64, 1024));
   options.memoryBudgetLabel = "the server's memory budget (--max-memory " + std::to_string(budget >> 20) + " MiB, " +

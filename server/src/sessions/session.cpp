@@ -125,7 +125,7 @@ Result<void> Session::applyScene(std::unique_lock<std::mutex>& updateLock, const
   // One view call from setScene to the session taking the new scene (pendingViewCalls_): the
   // render thread starts no pass in between, else the stats read here would wait for it (a
   // first sample's), and the pass after it (a new program's first, with the driver's compile,
-  // ~300 ms on lavapipe) could start before publishRequested_ is set or a reader of the first
+  // which is long on a CPU device) could start before publishRequested_ is set or a reader of the first
   // frame has asked.
   Result<void> applied = withViewPriority([&]() -> Result<void> {
     view_->interruptPass();
@@ -145,7 +145,7 @@ Result<void> Session::applyScene(std::unique_lock<std::mutex>& updateLock, const
     // The old scene's frame must not reach a stream client that connects now; seq is kept so
     // clients already streaming still see the next frame as newer. A frame of the old scene
     // being read or encoded still reaches those: while a user drags the camera, every frame is
-    // one change behind by the time it is encoded, and dropping them left ~2 frames/s.
+    // one change behind by the time it is encoded, and dropping them left the stream nearly still.
     latest_.png.reset();
     lastRead_.reset();
     return {};
@@ -423,7 +423,7 @@ void Session::renderLoop() {
       const uint64_t sppBefore = stats_.spp, passesBefore = stats_.passes;
       const bool previewBefore = stats_.preview;
       const uint64_t pixels = uint64_t(std::max(render_.width, 0)) * uint64_t(std::max(render_.height, 0));
-      // The pass, the read and the loop's own work (~2 ms) within one stream frame interval;
+      // The pass, the read and the loop's own small share within one stream frame interval;
       // never below kFrameWorkShare times the frame's read and encode, nor 5 ms.
       const double frameTargetMs =
           streamClients_ > 0 ? std::max({kStreamFrameMs - readMs_ - 2.0, kFrameWorkShare * (readMs_ + encodeMs_), 5.0})

@@ -108,7 +108,7 @@ class Session {
   // the wait is the one whose frame is read. `outcome` tells how the wait ended; on Stopped no
   // frame is read.
   // The frame is encoded (PNG, or PFM when `pfm`) before rendering resumes: on a CPU device the
-  // encoder and the render passes would share the cores, and the encode took 2-3x longer.
+  // encoder and the render passes would share the cores, and the encode took several times longer.
   struct EncodedFrame {
     std::vector<uint8_t> bytes;
     FrameStats stats;
@@ -134,21 +134,21 @@ class Session {
   static constexpr std::chrono::milliseconds kPublishInterval{33};
   // After a new program's first sample, how long its first pass waits for a further scene
   // change unless a reader asks for more samples. That pass carries the driver's JIT of the
-  // whole program, which nothing interrupts (~100-200 ms on lavapipe); a script that posts
-  // BRDFs in a loop makes its next change within ~50 ms of reading the first sample, and would
+  // whole program, which nothing interrupts and which is long on a CPU device; a script that posts
+  // BRDFs in a loop makes its next change soon after reading the first sample, and would
   // otherwise wait for that JIT of a program it no longer uses.
   static constexpr std::chrono::milliseconds kFirstPassGrace{80};
   // The frame interval a streamed session aims at: while a stream client watches, each pass is
   // sized to it less the time a frame's read takes (RenderView::renderPass's frame target).
   // Unwatched, passes keep samples_per_frame. docs/design.md section 5 asks for at least 20 frames/s;
-  // 42 ms (~24/s) leaves a margin for passes that overrun their plan (the encoder thread and the
+  // a shorter interval leaves a margin for passes that overrun their plan (the encoder thread and the
   // render worker's round trips share two cores with the device's threads). Where one sample
-  // is longer than the frame (mis at 512^2 on a 2-core VM), what keeps the still stream near
-  // 20-23 frames/s is showing passes partway (RenderView::renderPass), not this margin.
+  // is longer than the frame (mis on a large image on a small CPU device), what keeps the still
+  // stream near the goal is showing passes partway (RenderView::renderPass), not this margin.
   static constexpr double kStreamFrameMs = 42.0;
   // A frame's read and encode take at most about 1 / (1 + kFrameWorkShare) of a watched
-  // session's time: a large image's frames (1024x768: ~40 ms of read and encode on a 2-core
-  // VM) get longer passes instead of taking the CPU from rendering at ~24 frames/s.
+  // session's time: a large image's frames (whose read and encode are long on a CPU device)
+  // get longer passes instead of taking the CPU from rendering at the full frame rate.
   static constexpr double kFrameWorkShare = 2.0;
   // Stream frames with fewer samples than this (the first passes after a change: 1, then 3)
   // are sent at half resolution when the frame has at least kPreviewMinPixels and is not the

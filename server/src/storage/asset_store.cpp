@@ -337,7 +337,7 @@ void AssetStore::loadEnvironmentDir(const std::string& dir, std::vector<std::str
       continue;
     }
     // Only sniffed here, decoded when a scene first uses it: a full decode and cube conversion
-    // costs ~250 ms a world, and start-up must not grow with what is installed. A world that
+    // of every world would be slow, and start-up must not grow with what is installed. A world that
     // turns out unreadable then fails that scene with the decoder's reason, naming the world.
     std::optional<std::string> bytes = readSmallFile(file, kMaxSystemAssetBytes, /*followLinks=*/true);
     std::optional<AssetFormat> format = bytes ? sniffAssetFormat(*bytes) : std::nullopt;
