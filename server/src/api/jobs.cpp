@@ -92,11 +92,11 @@ void registerJobRoutes(httplib::Server& server, Service& service) {
         std::string list;
         for (const auto& u : unknown) list += (list.empty() ? "" : ", ") + u.get<std::string>();
         return sendJson(res,
-                        {{"error", "not_found"},
+                        {{"error", errorCodeName(ErrorCode::NotFound)},
                          {"message", "no BRDF named " + list},
                          {"field", "names"},
                          {"names", unknown}},
-                        404);
+                        errorHttpStatus(ErrorCode::NotFound));
       }
     }
     if (items.empty()) return sendError(res, ErrorCode::InvalidArgument, "no BRDFs to test");
