@@ -76,9 +76,9 @@ Result<std::vector<Series>> readSeries(const json& body, Service& service, const
     }
     const json* params = nullptr;
     if (auto p = s.find("params"); p != s.end()) params = &*p;
-    Result<ParamSetting> values = paramsFromJson(*series.brdf, series.brdfName, params, at + ".params", &series.notes);
-    if (!values) return values.takeError();
-    series.params = std::move(values.value());
+    BRDFA_TRY_ASSIGN(ParamSetting values,
+                     paramsFromJson(*series.brdf, series.brdfName, params, at + ".params", &series.notes));
+    series.params = std::move(values);
     series.label = series.brdfName;
     if (auto l = s.find("label"); l != s.end()) {
       if (!l->is_string() || l->get_ref<const std::string&>().size() > 200)
@@ -100,12 +100,10 @@ Result<PlotRequest> readRequest(PlotKind kind, const json& body) {
   }
   PlotRequest r;
   r.kind = kind;
-  Result<double> thetaI = readNumber(body, "theta_i", r.thetaIDeg);
-  if (!thetaI) return thetaI.takeError();
-  r.thetaIDeg = thetaI.value();
-  Result<double> phiD = readNumber(body, "phi_d", r.phiDDeg);
-  if (!phiD) return phiD.takeError();
-  r.phiDDeg = phiD.value();
+  BRDFA_TRY_ASSIGN(double thetaI, readNumber(body, "theta_i", r.thetaIDeg));
+  r.thetaIDeg = thetaI;
+  BRDFA_TRY_ASSIGN(double phiD, readNumber(body, "phi_d", r.phiDDeg));
+  r.phiDDeg = phiD;
   Result<double> resolution = readNumber(body, "resolution", 0);
   if (!resolution) return resolution.takeError();
   if (resolution.value() != std::floor(resolution.value()) || std::fabs(resolution.value()) > 1e6)

@@ -19,12 +19,10 @@ struct Compiled {
 };
 
 Result<Compiled> parseAndCompile(Service& service, const std::string& text) {
-  Result<BrdfDefinition> parsed = parseBrdf(text);
-  if (!parsed) return parsed.takeError();
-  auto def = std::make_shared<const BrdfDefinition>(std::move(parsed.value()));
-  Result<CompileInfo> info = service.renderer->compileBrdf(*def);
-  if (!info) return info.takeError();
-  return Compiled{std::move(def), std::move(info.value())};
+  BRDFA_TRY_ASSIGN(BrdfDefinition parsed, parseBrdf(text));
+  auto def = std::make_shared<const BrdfDefinition>(std::move(parsed));
+  BRDFA_TRY_ASSIGN(CompileInfo info, service.renderer->compileBrdf(*def));
+  return Compiled{std::move(def), std::move(info)};
 }
 
 nlohmann::json compileReport(const Compiled& c) {

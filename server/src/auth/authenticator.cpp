@@ -85,9 +85,8 @@ Result<std::unique_ptr<Authenticator>> Authenticator::create(const ServerConfig&
                       "everything); use --auth tokens for a class");
       break;
     case AuthMode::Tokens: {
-      Result<std::string> token = adminToken(config, log);
-      if (!token) return token.takeError();
-      auth->adminDigest_ = sha256Hex(token.value());
+      BRDFA_TRY_ASSIGN(std::string token, adminToken(config, log));
+      auth->adminDigest_ = sha256Hex(token);
       auth->users_ = std::make_unique<UserStore>((fs::path(config.dataDir) / "auth").string());
       break;
     }

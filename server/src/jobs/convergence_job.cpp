@@ -84,15 +84,13 @@ Result<ConvergenceJobSpec> parseConvergenceJob(const json& body, const SceneReso
     spec.modes.assign(std::begin(kDefaultModes), std::end(kDefaultModes));
   }
   if (auto it = body.find("time_ms"); it != body.end()) {
-    Result<int> ms = readMs(*it, "time_ms", kConvergenceMinMs, kConvergenceMaxMs);
-    if (!ms) return ms.takeError();
-    spec.timeMs = ms.value();
+    BRDFA_TRY_ASSIGN(int ms, readMs(*it, "time_ms", kConvergenceMinMs, kConvergenceMaxMs));
+    spec.timeMs = ms;
   }
   spec.referenceMs = std::min(4 * spec.timeMs, kConvergenceMaxReferenceMs);
   if (auto it = body.find("reference_ms"); it != body.end()) {
-    Result<int> ms = readMs(*it, "reference_ms", kConvergenceMinMs, kConvergenceMaxReferenceMs);
-    if (!ms) return ms.takeError();
-    spec.referenceMs = ms.value();
+    BRDFA_TRY_ASSIGN(int ms, readMs(*it, "reference_ms", kConvergenceMinMs, kConvergenceMaxReferenceMs));
+    spec.referenceMs = ms;
   }
   return spec;
 }
@@ -151,8 +149,7 @@ Scene withSampling(const Scene& base, SamplingMode mode) {
 // Warm-up: build (and JIT) every program on a tiny view, so no timed pass pays for it.
 Result<void> warmUpPrograms(Renderer& renderer, const ConvergenceJobSpec& spec, const Scene& base,
                             JobContext& context) {
-  Result<std::unique_ptr<RenderView>> warm = renderer.createView();
-  if (!warm) return warm.takeError();
+  BRDFA_TRY_ASSIGN(std::unique_ptr<RenderView> warm, renderer.createView());
   std::vector<SamplingMode> all = spec.modes;
   if (std::find(all.begin(), all.end(), SamplingMode::Mis) == all.end()) all.push_back(SamplingMode::Mis);
   for (SamplingMode mode : all) {
@@ -160,8 +157,8 @@ Result<void> warmUpPrograms(Renderer& renderer, const ConvergenceJobSpec& spec, 
     Scene s = withSampling(base, mode);
     s.render.width = s.render.height = kMinImageSize;
     s.render.samplesPerFrame = 1;
-    BRDFA_TRY(warm.value()->setScene(s));
-    BRDFA_TRY(warm.value()->renderPass());
+    BRDFA_TRY(warm->setScene(s));
+    BRDFA_TRY(warm->renderPass());
   }
   return {};
 }
@@ -170,18 +167,16 @@ Result<void> warmUpPrograms(Renderer& renderer, const ConvergenceJobSpec& spec, 
 // with it, or its error against the reference would read too small.
 Result<Frame> renderReference(Renderer& renderer, const ConvergenceJobSpec& spec, const Scene& base, double budget,
                               JobContext& context) {
-  Result<std::unique_ptr<RenderView>> view = renderer.createView();
-  if (!view) return view.takeError();
-  RenderView& v = *view.value();
+  BRDFA_TRY_ASSIGN(std::unique_ptr<RenderView> view, renderer.createView());
+  RenderView& v = *view;
   Scene referenceScene = withSampling(base, SamplingMode::Mis);
   referenceScene.render.seed ^= 0x9e3779b9u;
   BRDFA_TRY(v.setScene(referenceScene));
   for (;;) {
     if (context.cancelled()) return cancelledError();
-    Result<FrameStats> pass = v.renderPass();
-    if (!pass) return pass.takeError();
-    context.setProgress(std::min(pass->elapsedMs, double(spec.referenceMs)) / budget);
-    if (pass->elapsedMs >= spec.referenceMs || pass->done()) break;
+    BRDFA_TRY_ASSIGN(FrameStats pass, v.renderPass());
+    context.setProgress(std::min(pass.elapsedMs, double(spec.referenceMs)) / budget);
+    if (pass.elapsedMs >= spec.referenceMs || pass.done()) break;
   }
   return v.readFrame(true);
 }
@@ -199,10 +194,9 @@ struct Run {
 Result<std::vector<Run>> startRuns(Renderer& renderer, const ConvergenceJobSpec& spec, const Scene& base) {
   std::vector<Run> runs;
   for (SamplingMode mode : spec.modes) {
-    Result<std::unique_ptr<RenderView>> view = renderer.createView();
-    if (!view) return view.takeError();
-    BRDFA_TRY(view.value()->setScene(withSampling(base, mode)));
-    Run run{mode, std::move(view.value()), {}, false, json::array(), nullptr};
+    BRDFA_TRY_ASSIGN(std::unique_ptr<RenderView> view, renderer.createView());
+    BRDFA_TRY(view->setScene(withSampling(base, mode)));
+    Run run{mode, std::move(view), {}, false, json::array(), nullptr};
     run.stats = run.view->stats();
     runs.push_back(std::move(run));
   }
@@ -221,11 +215,10 @@ std::vector<double> checkpointTimes(const ConvergenceJobSpec& spec) {
 // Reads every run's frame and adds its point against the reference.
 Result<void> recordCheckpoint(std::vector<Run>& runs, const Frame& reference, double refRelError) {
   for (Run& run : runs) {
-    Result<Frame> frame = run.view->readFrame(true);
-    if (!frame) return frame.takeError();
-    const FrameStats& st = frame->stats;
+    BRDFA_TRY_ASSIGN(Frame frame, run.view->readFrame(true));
+    const FrameStats& st = frame.stats;
     double raw = 0;
-    std::optional<double> truth = trueRelError(frame->rgba32f, reference.rgba32f, refRelError, nullptr, nullptr, &raw);
+    std::optional<double> truth = trueRelError(frame.rgba32f, reference.rgba32f, refRelError, nullptr, nullptr, &raw);
     json point{{"elapsed_ms", st.elapsedMs},
                {"spp", st.spp},
                {"passes", st.passes},
@@ -260,10 +253,9 @@ Result<void> runToCheckpoints(std::vector<Run>& runs, const std::vector<double>&
       BRDFA_TRY(recordCheckpoint(runs, reference, refRelError));
       continue;
     }
-    Result<FrameStats> pass = slowest->view->renderPass();
-    if (!pass) return pass.takeError();
-    slowest->stats = pass.value();
-    slowest->done = pass->done();
+    BRDFA_TRY_ASSIGN(FrameStats pass, slowest->view->renderPass());
+    slowest->stats = pass;
+    slowest->done = pass.done();
     double progress = spent;
     for (const Run& run : runs) progress += std::min(run.stats.elapsedMs, double(spec.timeMs));
     context.setProgress(std::min(0.99, progress / budget));
@@ -321,18 +313,16 @@ Result<json> runConvergenceJob(Renderer& renderer, const ConvergenceJobSpec& spe
   const Scene base = convergenceBaseScene(spec);
   const double budget = static_cast<double>(spec.referenceMs) + static_cast<double>(spec.timeMs) * spec.modes.size();
   BRDFA_TRY(warmUpPrograms(renderer, spec, base, context));
-  Result<Frame> referenceFrame = renderReference(renderer, spec, base, budget, context);
-  if (!referenceFrame) return referenceFrame.takeError();
-  const Frame reference = std::move(referenceFrame.value());
+  BRDFA_TRY_ASSIGN(Frame referenceFrame, renderReference(renderer, spec, base, budget, context));
+  const Frame reference = std::move(referenceFrame);
   const double spent = spec.referenceMs;  // render ms of finished phases, for progress
   const double refRelError = reference.stats.relError.value_or(0.0);
   double refMeanLum = 0;
   size_t refPixels = 0;
   trueRelError(reference.rgba32f, reference.rgba32f, 0, &refMeanLum, &refPixels);
 
-  Result<std::vector<Run>> started = startRuns(renderer, spec, base);
-  if (!started) return started.takeError();
-  std::vector<Run> runs = std::move(started.value());
+  BRDFA_TRY_ASSIGN(std::vector<Run> started, startRuns(renderer, spec, base));
+  std::vector<Run> runs = std::move(started);
   const std::vector<double> checkpoints = checkpointTimes(spec);
   BRDFA_TRY(runToCheckpoints(runs, checkpoints, spec, reference, refRelError, spent, budget, context));
 

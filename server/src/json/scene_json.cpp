@@ -56,9 +56,8 @@ Result<double> readNumber(const json& v, const std::string& field, double lo, do
 }
 
 Result<float> readFloat(const json& v, const std::string& field, double lo, double hi) {
-  Result<double> d = readNumber(v, field, lo, hi);
-  if (!d) return d.takeError();
-  return static_cast<float>(d.value());
+  BRDFA_TRY_ASSIGN(double d, readNumber(v, field, lo, hi));
+  return static_cast<float>(d);
 }
 
 // Integers may be written 64 or 64.0 (some clients only have doubles), never 64.5.
@@ -99,9 +98,8 @@ Result<Vec3> readVec3(const json& v, const std::string& field, double lo, double
   if (!v.is_array() || v.size() != 3) return invalid(field, "expected an array of 3 numbers");
   Vec3 out{};
   for (size_t i = 0; i < 3; ++i) {
-    Result<float> f = readFloat(v[i], field + "[" + std::to_string(i) + "]", lo, hi);
-    if (!f) return f.takeError();
-    out[i] = f.value();
+    BRDFA_TRY_ASSIGN(float f, readFloat(v[i], field + "[" + std::to_string(i) + "]", lo, hi));
+    out[i] = f;
   }
   return out;
 }
@@ -113,9 +111,8 @@ template <class T, class F>
 Result<void> optionalField(const json& obj, const char* key, const std::string& prefix, T& dst, F read) {
   auto it = obj.find(key);
   if (it == obj.end()) return {};
-  auto r = read(*it, prefix + "." + key);
-  if (!r) return r.takeError();
-  dst = std::move(r.value());
+  BRDFA_TRY_ASSIGN(auto r, read(*it, prefix + "." + key));
+  dst = std::move(r);
   return {};
 }
 
@@ -133,10 +130,9 @@ Result<void> parseCamera(const json& j, Camera& cam) {
   cam.pitch = std::clamp(cam.pitch, -kMaxPitch, kMaxPitch);
   if (auto it = j.find("fov"); it != j.end()) {
     // Open interval: 0 and 180 degrees make a degenerate projection.
-    Result<float> fov = readFloat(*it, "camera.fov", 1, 179);
-    if (!fov) return fov.takeError();
-    if (fov.value() <= 1.0f || fov.value() >= 179.0f) return invalid("camera.fov", "must be in (1, 179)");
-    cam.fov = fov.value();
+    BRDFA_TRY_ASSIGN(float fov, readFloat(*it, "camera.fov", 1, 179));
+    if (fov <= 1.0f || fov >= 179.0f) return invalid("camera.fov", "must be in (1, 179)");
+    cam.fov = fov;
   }
   return {};
 }
@@ -178,9 +174,8 @@ Result<void> checkEnvironmentName(const EnvironmentSettings& env, const SceneRes
 Result<Vec3> readParamValue(const BrdfParam& p, const json& v, const std::string& field) {
   switch (p.type) {
     case ParamType::Float: {
-      Result<float> f = readFloat(v, field, -kAbsurd, kAbsurd);
-      if (!f) return f.takeError();
-      return Vec3{f.value(), 0, 0};
+      BRDFA_TRY_ASSIGN(float f, readFloat(v, field, -kAbsurd, kAbsurd));
+      return Vec3{f, 0, 0};
     }
     case ParamType::Color: {
       if (!v.is_array() || v.size() != 3) return invalid(field, "a color is an array of 3 numbers");
@@ -214,9 +209,8 @@ Result<std::vector<TextureBinding>> readTextures(const json& j, const std::strin
       BRDFA_TRY(checkKeys(j[i], at, {"name", "srgb"}));
       auto name = j[i].find("name");
       if (name == j[i].end()) return invalid(at + ".name", "required");
-      Result<std::string> n = readString(*name, at + ".name");
-      if (!n) return n.takeError();
-      t.name = n.value();
+      BRDFA_TRY_ASSIGN(std::string n, readString(*name, at + ".name"));
+      t.name = n;
       BRDFA_TRY(optionalField(j[i], "srgb", at, t.srgb, readBool));
     }
     out.push_back(std::move(t));
@@ -264,9 +258,8 @@ Result<SceneObject> parseObject(const json& j, const std::string& prefix, const 
   BRDFA_TRY(optionalField(j, "scale", prefix, obj.scale,
                           [](const json& v, const std::string& f) { return readVec3(v, f, 1e-6, kAbsurd); }));
   if (auto it = j.find("textures"); it != j.end()) {
-    Result<std::vector<TextureBinding>> textures = readTextures(*it, prefix + ".textures");
-    if (!textures) return textures.takeError();
-    obj.textures = std::move(textures.value());
+    BRDFA_TRY_ASSIGN(std::vector<TextureBinding> textures, readTextures(*it, prefix + ".textures"));
+    obj.textures = std::move(textures);
   }
   // Type problems are reported before unknown names, so one request gets the 400 first.
   const json* params = nullptr;
@@ -317,10 +310,9 @@ Result<void> parseRender(const json& j, RenderSettings& rs) {
   BRDFA_TRY(optionalField(j, "samples_per_frame", "render", rs.samplesPerFrame, intIn(1, kMaxSamplesPerFrame)));
   BRDFA_TRY(optionalField(j, "max_samples", "render", rs.maxSamples, intIn(1, kMaxTotalSamples)));
   if (auto it = j.find("sampling"); it != j.end()) {
-    Result<std::string> s = readString(*it, "render.sampling");
-    if (!s) return s.takeError();
-    if (!samplingModeFromName(s.value(), rs.sampling))
-      return invalid("render.sampling", std::string("must be ") + kSamplingChoices + ", got \"" + s.value() + "\"");
+    BRDFA_TRY_ASSIGN(std::string s, readString(*it, "render.sampling"));
+    if (!samplingModeFromName(s, rs.sampling))
+      return invalid("render.sampling", std::string("must be ") + kSamplingChoices + ", got \"" + s + "\"");
   }
   // A relative RMS error to stop at: a number in (0, 1), or null (none; the default).
   if (auto it = j.find("target_error"); it != j.end() && !it->is_null()) {
@@ -333,17 +325,15 @@ Result<void> parseRender(const json& j, RenderSettings& rs) {
   }
   // Independent replicates of one scene (renderer scene.h): an integer in [0, 2^31).
   if (auto it = j.find("seed"); it != j.end()) {
-    Result<int> seed = readInt(*it, "render.seed", 0, 2147483647LL);
-    if (!seed) return seed.takeError();
-    rs.seed = static_cast<uint32_t>(seed.value());
+    BRDFA_TRY_ASSIGN(int seed, readInt(*it, "render.seed", 0, 2147483647LL));
+    rs.seed = static_cast<uint32_t>(seed);
   }
   BRDFA_TRY(optionalField(j, "exposure", "render", rs.exposure,
                           [](const json& v, const std::string& f) { return readFloat(v, f, -40, 40); }));
   if (auto it = j.find("tonemap"); it != j.end()) {
-    Result<std::string> s = readString(*it, "render.tonemap");
-    if (!s) return s.takeError();
-    if (!toneMapFromName(s.value(), rs.toneMap))
-      return invalid("render.tonemap", "must be \"clamp\", \"reinhard\" or \"aces\", got \"" + s.value() + "\"");
+    BRDFA_TRY_ASSIGN(std::string s, readString(*it, "render.tonemap"));
+    if (!toneMapFromName(s, rs.toneMap))
+      return invalid("render.tonemap", "must be \"clamp\", \"reinhard\" or \"aces\", got \"" + s + "\"");
   }
   return {};
 }
@@ -370,14 +360,12 @@ Result<Scene> sceneFromJson(const json& j, const SceneResolver& r, std::vector<s
     if (it->size() > static_cast<size_t>(kMaxObjects))
       return invalid("objects", "at most " + std::to_string(kMaxObjects) + " objects");
     for (size_t i = 0; i < it->size(); ++i) {
-      Result<SceneObject> obj = parseObject((*it)[i], "objects[" + std::to_string(i) + "]", r, notes);
-      if (!obj) return obj.takeError();
-      scene.objects.push_back(std::move(obj.value()));
+      BRDFA_TRY_ASSIGN(SceneObject obj, parseObject((*it)[i], "objects[" + std::to_string(i) + "]", r, notes));
+      scene.objects.push_back(std::move(obj));
     }
   } else {
-    Result<SceneObject> obj = parseObject(json::object(), "objects[0]", r, notes);
-    if (!obj) return obj.takeError();
-    scene.objects.push_back(std::move(obj.value()));
+    BRDFA_TRY_ASSIGN(SceneObject obj, parseObject(json::object(), "objects[0]", r, notes));
+    scene.objects.push_back(std::move(obj));
   }
   return scene;
 }
@@ -444,10 +432,9 @@ Result<std::map<std::string, Vec3>> paramsFromJson(const BrdfDefinition& brdf, c
       for (const BrdfParam& q : brdf.params) known += (known.empty() ? "" : ", ") + q.name;
       return invalid(at, "BRDF '" + brdfName + "' has no parameter '" + it.key() + "' (it has: " + known + ")");
     }
-    Result<Vec3> value = readParamValue(*p, it.value(), at);
-    if (!value) return value.takeError();
+    BRDFA_TRY_ASSIGN(Vec3 value, readParamValue(*p, it.value(), at));
     std::string note;
-    out[p->name] = clampParam(*p, value.value(), at, brdfName, note);
+    out[p->name] = clampParam(*p, value, at, brdfName, note);
     if (!note.empty() && notes) notes->push_back(std::move(note));
   }
   return out;

@@ -58,9 +58,8 @@ Result<std::unique_ptr<Service>> Service::create(const ServerConfig& config, std
   std::error_code ec;
   std::filesystem::create_directories(config.dataDir, ec);
   if (ec) log.push_back("warning: cannot create data directory " + config.dataDir + ": " + ec.message());
-  Result<std::unique_ptr<Authenticator>> auth = Authenticator::create(config, log);
-  if (!auth) return auth.takeError();
-  service->auth = std::move(auth.value());
+  BRDFA_TRY_ASSIGN(std::unique_ptr<Authenticator> auth, Authenticator::create(config, log));
+  service->auth = std::move(auth);
 
   RendererOptions options;
   options.deviceName = config.deviceName;
@@ -89,9 +88,8 @@ Result<std::unique_ptr<Service>> Service::create(const ServerConfig& config, std
   options.buildSeconds = config.buildBudgetSec;
   options.passSeconds = config.passBudgetSec;
   options.checkSeconds = config.checkBudgetSec;
-  Result<std::shared_ptr<Renderer>> renderer = Renderer::create(options);
-  if (!renderer) return renderer.takeError();
-  service->renderer = std::move(renderer.value());
+  BRDFA_TRY_ASSIGN(std::shared_ptr<Renderer> renderer, Renderer::create(options));
+  service->renderer = std::move(renderer);
 
   AssetStoreLimits assetLimits;
   assetLimits.file.maxBytes = config.maxUploadBytes;

@@ -251,9 +251,8 @@ Result<Session::EncodedFrame> Session::waitAndEncodeFrame(uint64_t minSpp, std::
     ++pendingViewCalls_;
   }
   OnExit endCall{[this] { endViewCall(); }};
-  Result<Frame> frame = view_->readFrame(pfm);
-  if (!frame) return frame.takeError();
-  const Frame& f = frame.value();
+  BRDFA_TRY_ASSIGN(Frame frame, view_->readFrame(pfm));
+  const Frame& f = frame;
   {
     std::lock_guard lock(mutex_);
     noteStatsLocked(f.stats, false);

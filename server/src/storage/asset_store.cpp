@@ -535,9 +535,8 @@ Result<void> AssetStore::storeReserved(const AssetRecord& rec, const AssetUpload
 Result<AssetRecord> AssetStore::add(const AssetUpload& up, AssetRejection& rejection, const AssetOwner& owner,
                                     AssetQuotaHit* quotaHit) {
   rejection = AssetRejection::None;
-  Result<UploadClaims> claims = checkUploadClaims(up, limits_.file.maxBytes, rejection);
-  if (!claims) return claims.takeError();
-  const AssetKind kind = claims->kind;
+  BRDFA_TRY_ASSIGN(UploadClaims claims, checkUploadClaims(up, limits_.file.maxBytes, rejection));
+  const AssetKind kind = claims.kind;
 
   // Under mutex_: the uploader's quota, then the server's caps, counting uploads being written
   // (the uploader's own in-flight ones count as kept: `reservedBy_`). Other replicas' uploads
@@ -567,7 +566,7 @@ Result<AssetRecord> AssetStore::add(const AssetUpload& up, AssetRejection& rejec
   rec.source = AssetSource::Upload;
   rec.format = info->format;
   rec.layout = info->layout;
-  rec.name = claims->displayName;
+  rec.name = claims.displayName;
   rec.bytes = up.size;
   rec.vertices = info->vertices;
   rec.triangles = info->triangles;

@@ -76,12 +76,11 @@ fs::path folderOf(const fs::path& target) {
 
 Result<void> writeFileAtomically(const fs::path& target, std::string_view data) {
   const fs::path dir = folderOf(target);
-  Result<fs::path> tmp = writeTempFile(dir, target, data);
-  if (!tmp) return tmp.takeError();
-  if (::rename(tmp->c_str(), target.c_str()) != 0) {
+  BRDFA_TRY_ASSIGN(fs::path tmp, writeTempFile(dir, target, data));
+  if (::rename(tmp.c_str(), target.c_str()) != 0) {
     const int err = errno;
-    ::unlink(tmp->c_str());
-    return ioError("cannot rename over " + target.string() + " from", tmp.value(), err);
+    ::unlink(tmp.c_str());
+    return ioError("cannot rename over " + target.string() + " from", tmp, err);
   }
   return fsyncDir(dir);
 }
@@ -89,15 +88,14 @@ Result<void> writeFileAtomically(const fs::path& target, std::string_view data) 
 Result<void> createFileExclusively(const fs::path& target, std::string_view data, bool& created) {
   created = false;
   const fs::path dir = folderOf(target);
-  Result<fs::path> tmp = writeTempFile(dir, target, data);
-  if (!tmp) return tmp.takeError();
+  BRDFA_TRY_ASSIGN(fs::path tmp, writeTempFile(dir, target, data));
   // link(2) fails with EEXIST when the name is taken, where rename(2) would replace it.
-  const int rc = ::link(tmp->c_str(), target.c_str());
+  const int rc = ::link(tmp.c_str(), target.c_str());
   const int err = errno;
-  ::unlink(tmp->c_str());
+  ::unlink(tmp.c_str());
   if (rc != 0) {
     if (err == EEXIST) return fsyncDir(dir);
-    return ioError("cannot create " + target.string() + " from", tmp.value(), err);
+    return ioError("cannot create " + target.string() + " from", tmp, err);
   }
   created = true;
   return fsyncDir(dir);
