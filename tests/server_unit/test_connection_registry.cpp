@@ -4,7 +4,7 @@
 #include <sys/socket.h>
 #include <unistd.h>
 
-#include "brdfa_server/connection_guard.h"
+#include "http/connection_guard.h"
 
 namespace brdfa::server {
 namespace {

@@ -6,8 +6,8 @@
 #include <cmath>
 #include <random>
 
-#include "brdfa_server/convergence.h"
-#include "brdfa_server/convergence_job.h"
+#include "jobs/convergence.h"
+#include "jobs/convergence_job.h"
 
 namespace brdfa::server {
 namespace {

@@ -7,8 +7,8 @@
 #include <limits>
 #include <sstream>
 
-#include "brdfa_server/metrics.h"
-#include "brdfa_server/prometheus_text.h"
+#include "metrics/metrics.h"
+#include "metrics/prometheus_text.h"
 
 namespace brdfa::server {
 namespace {

@@ -8,7 +8,7 @@
 #include <fstream>
 #include <nlohmann/json.hpp>
 
-#include "brdfa_server/session_directory.h"
+#include "sessions/session_directory.h"
 
 namespace brdfa::server {
 namespace {

@@ -6,8 +6,8 @@
 #include <fstream>
 #include <thread>
 
-#include "brdfa_server/atomic_file.h"
-#include "brdfa_server/brdf_library.h"
+#include "util/atomic_file.h"
+#include "storage/brdf_library.h"
 
 namespace brdfa::server {
 namespace {

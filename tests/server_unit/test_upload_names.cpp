@@ -2,7 +2,7 @@
 // without controls or the invisible format characters that reorder or hide text.
 #include <gtest/gtest.h>
 
-#include "brdfa_server/asset_store.h"
+#include "storage/asset_store.h"
 
 namespace brdfa::server {
 namespace {

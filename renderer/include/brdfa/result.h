@@ -8,7 +8,9 @@
 
 namespace brdfa {
 
-// What kind of failure; the server maps each code to one HTTP status in one place.
+// What kind of failure. Each code has one wire name and one HTTP status (errorCodeName,
+// errorHttpStatus: the table in result.cpp); the server answers every error through them.
+// Codes are appended, never reordered: the render worker sends them as numbers.
 enum class ErrorCode {
   InvalidArgument,  // the caller passed something malformed or out of range
   NotFound,         // a named thing (environment, mesh, parameter) does not exist
@@ -19,9 +21,31 @@ enum class ErrorCode {
   RenderBudget,     // the program (or scene) took the render worker past its time or memory
                     // budget and is quarantined (RendererOptions::isolate)
   Internal,         // a bug: an invariant did not hold
+  // Failures of an HTTP request itself, answered by the server (docs/api.md, Errors).
+  BadJson,             // the body is not JSON
+  Unauthorized,        // no valid credentials
+  Forbidden,           // the requester may see the thing but not do this to it
+  Conflict,            // the request clashes with the thing's current state
+  NoScene,             // the session has no scene yet
+  PayloadTooLarge,     // the body or an upload is over a limit
+  TooManySessions,     // the server's session cap is reached
+  TooManyJobs,         // the job queue is full
+  QuotaExceeded,       // one person is past one of their quotas
+  ClientClosed,        // the client went away before the answer
+  StorageError,        // reading or writing the data directory failed
+  StorageFull,         // the data directory (or the uploads' budget) is full
+  Busy,                // a shared slot (render, frame wait) did not free up in time
+  Unavailable,         // the thing stopped or the server is shutting down
+  TooManyStreams,      // the cap on concurrent streams is reached
+  TooManyConnections,  // one address holds too many connections
+  Draining,            // the server takes no new sessions or jobs (SIGTERM)
+  CrossSite,           // a state-changing request from a page of another site
 };
 
+// The snake_case name clients see as "error" in JSON bodies ("invalid_argument", ...).
 const char* errorCodeName(ErrorCode code);
+// The HTTP status the server answers the code with.
+int errorHttpStatus(ErrorCode code);
 
 // One compiler or parser message. `line` is 1-based in the submitted .brdf text;
 // 0 means the message is not attributable to a line of the submitted text.
@@ -84,3 +108,21 @@ class [[nodiscard]] Result<void> {
 };
 
 }  // namespace brdfa
+
+// Propagates an Error from a Result-returning expression: returns it from the enclosing function
+// (whose return type is a Result or an Error) on failure.
+#define BRDFA_TRY(expr)                                      \
+  do {                                                       \
+    auto brdfa_try_r_ = (expr);                              \
+    if (!brdfa_try_r_.ok()) return brdfa_try_r_.takeError(); \
+  } while (0)
+
+#define BRDFA_CONCAT_INNER_(a, b) a##b
+#define BRDFA_CONCAT_(a, b) BRDFA_CONCAT_INNER_(a, b)
+// Declares `lhs` (e.g. `auto x` or `Scene scene`) from a Result<T>-returning expression's value,
+// or returns its Error from the enclosing function.
+#define BRDFA_TRY_ASSIGN(lhs, expr) BRDFA_TRY_ASSIGN_IMPL_(BRDFA_CONCAT_(brdfa_try_a_, __LINE__), lhs, expr)
+#define BRDFA_TRY_ASSIGN_IMPL_(tmp, lhs, expr) \
+  auto tmp = (expr);                           \
+  if (!tmp.ok()) return tmp.takeError();       \
+  lhs = std::move(tmp.value())

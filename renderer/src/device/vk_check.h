@@ -24,9 +24,3 @@ inline Error vkError(VkResult r, const char* what) {
     if (brdfa_vk_r_ != VK_SUCCESS) return ::brdfa::vkError(brdfa_vk_r_, #call); \
   } while (0)
 
-// Propagates an Error from a Result-returning expression.
-#define BRDFA_TRY(expr)                                     \
-  do {                                                      \
-    auto brdfa_try_r_ = (expr);                             \
-    if (!brdfa_try_r_.ok()) return brdfa_try_r_.takeError(); \
-  } while (0)
