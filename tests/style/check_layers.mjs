@@ -22,7 +22,7 @@ export const TREES = [
   },
   {
     root: 'server/src',
-    order: ['util', 'metrics', 'http', 'auth', 'storage', 'json', 'sessions', 'jobs', 'service', 'api', 'app'],
+    order: ['util', 'metrics', 'http', 'config', 'auth', 'storage', 'json', 'jobs', 'sessions', 'service', 'api', 'app'],
     above: [],
     forbid: [/^vulkan\//, /^glslang\//],
   },
