@@ -18,6 +18,7 @@
 
 #include "brdfa/brdf.h"
 #include "brdf_features.h"
+#include "program_assembler.h"
 
 namespace brdfa {
 
@@ -375,11 +376,12 @@ void Parser::handleOutsideLine(std::string_view text, int line) {
 void Parser::handleGlslLine(std::string_view raw, int line) {
   if (!glslTarget_) return;  // a duplicate section, already reported
   std::string_view t = trim(raw);
-  // Not a '#' comment: the file meant to pull in code it does not hold, and dropping the line
-  // would only move the error elsewhere (an undefined function) or hide it.
-  if (!t.empty() && t.front() == '#' && trim(t.substr(1)).substr(0, 7) == "include")
-    error(line, "#include is not supported: a .brdf file holds all its code; paste the included code in");
-  if (!t.empty() && t.front() == '#' && !isPreprocessorDirective(t)) raw = {};
+  // Not a '#' comment: `#include "terms/<name>.glsl"` pulls in a shared term (the assembler
+  // resolves it; an unknown name fails to compile on this line). Any other include is an error
+  // here, since dropping the line would only move the error elsewhere or hide it.
+  const TermInclude include = parseTermInclude(t);
+  if (include.isInclude && !include.error.empty()) error(line, include.error);
+  if (!t.empty() && t.front() == '#' && !include.isInclude && !isPreprocessorDirective(t)) raw = {};
   glslTarget_->append(raw);
   glslTarget_->push_back('\n');
 }

@@ -9,6 +9,8 @@
 #include <algorithm>
 #include <cctype>
 #include <cstring>
+#include <mutex>
+#include <set>
 #include <unordered_set>
 
 #include "brdf_features.h"
@@ -212,7 +214,125 @@ struct EngineMacro {
 };
 constexpr EngineMacro kEngineMacros[] = {{"PI", "3.14159265359"}, {"LI", "8."}};
 
+// ---------------------------------------------------------------------------------------------
+// Term includes (docs/design.md section 3). A term is trusted renderer code emitted in the
+// generated region; only its include line stands in the user's text.
+
+bool isTermNameChar(char c) { return (c >= 'a' && c <= 'z') || (c >= '0' && c <= '9') || c == '_'; }
+
+std::string_view trimmed(std::string_view s) {
+  const size_t b = s.find_first_not_of(" \t\r");
+  if (b == std::string_view::npos) return {};
+  return s.substr(b, s.find_last_not_of(" \t\r") - b + 1);
+}
+
+std::string includeError(std::string_view argument, const char* reason) {
+  return "#include " + std::string(argument) + ": " + reason +
+         "; a BRDF includes only shared terms, as #include \"terms/<name>.glsl\"";
+}
+
+std::mutex& defaultTermsMutex() {
+  static std::mutex m;
+  return m;
+}
+
+std::shared_ptr<const TermSources>& defaultTermsSlot() {
+  static std::shared_ptr<const TermSources> slot = std::make_shared<const TermSources>();
+  return slot;
+}
+
+// Resolves the include lines of the BRDF's text. Collects the included terms' texts in emission
+// order, a term after the terms it includes, each once (`seen_` also ends include cycles).
+class TermCollector {
+ public:
+  explicit TermCollector(const TermSources& terms) : terms_(terms) {}
+
+  // `text` with each include line blanked, or replaced by an `#error` line when it does not
+  // resolve; the line count stays, so the file's line numbers do too.
+  std::string resolve(const std::string& text) {
+    std::string out;
+    out.reserve(text.size());
+    size_t at = 0;
+    while (at < text.size()) {
+      size_t end = text.find('\n', at);
+      if (end == std::string::npos) end = text.size();
+      const std::string_view line(text.data() + at, end - at);
+      const TermInclude inc = parseTermInclude(line);
+      if (!inc.isInclude) out.append(line);
+      else if (!inc.error.empty()) out += "#error malformed include - name a shared term as terms/NAME.glsl";
+      else if (!terms_.count(inc.path)) out += "#error unknown shared term " + termName(inc.path) + " - " + known();
+      else add(inc.path);
+      if (end < text.size()) out.push_back('\n');
+      at = end + 1;
+    }
+    return out;
+  }
+
+  // The included terms' texts (their own include lines blanked), in emission order.
+  const std::vector<std::string>& texts() const { return texts_; }
+
+ private:
+  static std::string termName(const std::string& path) { return path.substr(6, path.size() - 11); }
+
+  std::string known() const {
+    std::string names = "known terms are";
+    for (const auto& entry : terms_) names += " " + termName(entry.first);
+    return names;
+  }
+
+  void add(const std::string& path) {
+    if (!seen_.insert(path).second) return;
+    std::string text = resolve(terms_.at(path));  // adds the term's own includes first
+    texts_.push_back(std::move(text));
+  }
+
+  const TermSources& terms_;
+  std::set<std::string> seen_;
+  std::vector<std::string> texts_;
+};
+
 }  // namespace
+
+TermInclude parseTermInclude(std::string_view line) {
+  TermInclude r;
+  std::string_view t = trimmed(line);
+  if (t.empty() || t.front() != '#') return r;
+  t = trimmed(t.substr(1));
+  if (!t.starts_with("include") || (t.size() > 7 && isIdentChar(t[7]))) return r;
+  r.isInclude = true;
+  std::string_view arg = t.substr(7);
+  if (size_t comment = arg.find("//"); comment != std::string_view::npos) arg = arg.substr(0, comment);
+  arg = trimmed(arg);
+  if (arg.size() < 2 || arg.front() != '"' || arg.back() != '"') {
+    r.error = includeError(arg, "expected a path in double quotes");
+    return r;
+  }
+  const std::string_view path = arg.substr(1, arg.size() - 2);
+  if (path.starts_with('/') || path.find("..") != std::string_view::npos ||
+      path.find('\\') != std::string_view::npos || path.find(':') != std::string_view::npos) {
+    r.error = includeError(arg, "the path may not leave shaders/lib/terms");
+    return r;
+  }
+  const bool shaped = path.starts_with("terms/") && path.ends_with(".glsl") && path.size() > 11 &&
+                      std::all_of(path.begin() + 6, path.end() - 5, isTermNameChar);
+  if (!shaped) {
+    r.error = includeError(arg, "not a shared term path");
+    return r;
+  }
+  r.path = std::string(path);
+  return r;
+}
+
+void setDefaultTermSources(TermSources terms) {
+  auto shared = std::make_shared<const TermSources>(std::move(terms));
+  std::lock_guard<std::mutex> lock(defaultTermsMutex());
+  defaultTermsSlot() = std::move(shared);
+}
+
+std::shared_ptr<const TermSources> defaultTermSources() {
+  std::lock_guard<std::mutex> lock(defaultTermsMutex());
+  return defaultTermsSlot();
+}
 
 ParamBlockLayout layoutParams(const std::vector<BrdfParam>& params) {
   ParamBlockLayout layout;
@@ -273,6 +393,14 @@ AssembledProgram assembleProgram(const ProgramSpec& spec) {
   for (const std::string& chunk : spec.userChunks) appendLine(s, chunk);
 
   if (spec.brdf) {
+    // Included terms go before the renames and engine macros below, which are for the user's
+    // text only; the include lines themselves become blank (or #error) lines of that text.
+    const std::shared_ptr<const TermSources> fallback = spec.terms ? nullptr : defaultTermSources();
+    TermCollector collector(spec.terms ? *spec.terms : *fallback);
+    const std::string shader = collector.resolve(spec.brdf->shader);
+    const std::string sampleShader = spec.brdf->hasSampler() ? collector.resolve(spec.brdf->sampleShader) : "";
+    for (const std::string& text : collector.texts()) appendLine(s, text);
+
     // User functions named like GLSL built-ins (see builtinFunctionNames) are renamed for the
     // user's sections only: the #defines sit in the generated region before the first user
     // `#line`, so user line numbers are untouched, and are #undef'd before the integrator.
@@ -292,9 +420,9 @@ AssembledProgram assembleProgram(const ProgramSpec& spec) {
       }
     }
 
-    appendUserText(s, spec.brdf->shader, spec.brdf->shaderFirstLine);
+    appendUserText(s, shader, spec.brdf->shaderFirstLine);
     if (spec.brdf->hasSampler())
-      appendUserText(s, spec.brdf->sampleShader, spec.brdf->sampleFirstLine);
+      appendUserText(s, sampleShader, spec.brdf->sampleFirstLine);
     for (const std::string& name : renamed) s += "#undef " + name + "\n";
     // The BRDF's own macros end with its text: none may rewrite the integrator's code.
     collectDefinedMacros(spec.brdf->shader, macros);

@@ -1,11 +1,14 @@
 // Assembles a shading program in the fixed order of docs/design.md section 2:
 //   prelude (#version, extensions, defines), generated uniforms (the BRDF's parameter block),
-//   common code (shaders/lib), the BRDF (user text under `#line`), the integrator (with main).
+//   the BRDF's inputs, the shared terms its text includes (shaders/lib/terms), the BRDF (user
+//   text under `#line`), common code (shaders/lib), the integrator (with main).
 #pragma once
 
 #include <cstdint>
 #include <map>
+#include <memory>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "brdfa/brdf.h"
@@ -32,6 +35,25 @@ struct ParamBlockLayout {
 
 ParamBlockLayout layoutParams(const std::vector<BrdfParam>& params);
 
+// GLSL text of the shared terms, shaders/lib/terms/<name>.glsl, keyed "terms/<name>.glsl".
+using TermSources = std::map<std::string, std::string>;
+
+// One line of BRDF text read as a term include, `#include "terms/<name>.glsl"` (<name> of
+// a-z, 0-9 and '_'; a trailing `//` comment is allowed). `isInclude` is false for any other
+// line; for an include, `path` is the term's key, or `error` says why the line is malformed
+// (another folder, `..`, an absolute path, <...> quotes).
+struct TermInclude {
+  bool isInclude = false;
+  std::string path;
+  std::string error;
+};
+TermInclude parseTermInclude(std::string_view line);
+
+// The terms a ProgramSpec without its own `terms` resolves against: those ShaderSources::load
+// read last (empty before any load). Safe to call from any thread.
+void setDefaultTermSources(TermSources terms);
+std::shared_ptr<const TermSources> defaultTermSources();
+
 struct ProgramSpec {
   const BrdfDefinition* brdf = nullptr;
   std::vector<std::string> defines;       // "NAME" or "NAME VALUE", emitted as #define in the prelude
@@ -41,6 +63,8 @@ struct ProgramSpec {
   std::vector<std::string> userChunks;
   std::vector<std::string> commonChunks;
   std::string integrator;                 // kernel text containing main()
+  // Where the BRDF's `#include "terms/<name>.glsl"` lines resolve; null: defaultTermSources().
+  const TermSources* terms = nullptr;
 };
 
 struct AssembledProgram {
@@ -50,7 +74,10 @@ struct AssembledProgram {
 };
 
 // Never fails: syntax problems surface when the result is compiled. Generated parts are emitted
-// under `#line 1 0` so only the BRDF's own text is reported against file lines.
+// under `#line 1 0` so only the BRDF's own text is reported against file lines. Each term the
+// BRDF's text includes (its own includes first) is emitted once, before that text, and its
+// include line becomes an empty line; an include that cannot be resolved becomes an `#error`
+// line, so compiling reports it on the include's line of the file.
 AssembledProgram assembleProgram(const ProgramSpec& spec);
 
 // The default seed is the FNV-1a 64 offset basis (0xcbf29ce484222325).

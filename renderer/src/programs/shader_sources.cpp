@@ -3,15 +3,18 @@
 #include <filesystem>
 #include <fstream>
 #include <sstream>
+#include <string_view>
 
 namespace brdfa {
 
 Result<ShaderSources> ShaderSources::load(const std::string& shaderDir) {
   namespace fs = std::filesystem;
   ShaderSources sources;
-  for (const char* sub : {"lib", "kernels"}) {
+  for (const char* sub : {"lib", "kernels", "lib/terms"}) {
     fs::path dir = fs::path(shaderDir) / sub;
     std::error_code ec;
+    // lib/terms is optional, so an older shader tree (a bench's A/B side) still loads.
+    if (!fs::is_directory(dir, ec) && std::string_view(sub) == "lib/terms") continue;
     if (!fs::is_directory(dir, ec))
       return makeError(ErrorCode::NotFound, "shader folder not found: " + dir.string());
     for (const auto& entry : fs::directory_iterator(dir, ec)) {
@@ -22,6 +25,10 @@ Result<ShaderSources> ShaderSources::load(const std::string& shaderDir) {
       sources.files_[std::string(sub) + "/" + entry.path().filename().string()] = text.str();
     }
   }
+  // The shared terms BRDF files include, keyed as they name them ("terms/<name>.glsl").
+  for (const auto& [path, text] : sources.files_)
+    if (path.starts_with("lib/terms/")) sources.terms_[path.substr(4)] = text;
+  setDefaultTermSources(sources.terms_);
   return sources;
 }
 
