@@ -21,11 +21,12 @@
 
 #include "brdfa/heap_tuning.h"
 #include "brdfa/renderer.h"
-#include "compile_protocol.h"
-#include "device_activity.h"
-#include "render_wire.h"
-#include "renderer_impl.h"
-#include "worker_process.h"
+
+#include "device/device_activity.h"
+#include "isolation/render_wire.h"
+#include "isolation/worker_process.h"
+#include "programs/compile_protocol.h"
+#include "render/renderer_impl.h"
 
 namespace brdfa {
 namespace {

@@ -4,7 +4,7 @@
 #include <cmath>
 #include <cstring>
 
-#include "renderer_impl.h"
+#include "render/renderer_impl.h"
 
 namespace brdfa {
 

@@ -7,10 +7,10 @@
 #include <cstring>
 #include <iterator>
 
-#include "brdf_features.h"
-#include "chi_square.h"
-#include "renderer_impl.h"
-#include "vk_check.h"
+#include "analysis/chi_square.h"
+#include "device/vk_check.h"
+#include "programs/brdf_features.h"
+#include "render/renderer_impl.h"
 
 namespace brdfa {
 

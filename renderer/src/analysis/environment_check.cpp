@@ -2,9 +2,9 @@
 #include <algorithm>
 #include <cmath>
 
-#include "chi_square.h"
-#include "environment_maps.h"
-#include "renderer_impl.h"
+#include "analysis/chi_square.h"
+#include "assets/environment_maps.h"
+#include "render/renderer_impl.h"
 
 namespace brdfa {
 

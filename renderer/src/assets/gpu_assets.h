@@ -8,10 +8,10 @@
 #include <string>
 #include <vector>
 
-#include "environment_sampling.h"
-#include "memory_ledger.h"
-#include "program_assembler.h"
-#include "vk_resources.h"
+#include "assets/environment_sampling.h"
+#include "core/memory_ledger.h"
+#include "device/vk_resources.h"
+#include "programs/program_assembler.h"
 
 namespace brdfa {
 

@@ -9,7 +9,7 @@
 #include <string>
 #include <string_view>
 
-#include "image_structure.h"
+#include "assets/image_structure.h"
 
 namespace brdfa {
 

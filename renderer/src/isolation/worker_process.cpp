@@ -1,4 +1,4 @@
-#include "worker_process.h"
+#include "isolation/worker_process.h"
 
 #include <signal.h>
 #include <spawn.h>

@@ -17,7 +17,8 @@
 #include <vector>
 
 #include "brdfa/brdf.h"
-#include "brdf_features.h"
+
+#include "programs/brdf_features.h"
 
 namespace brdfa {
 

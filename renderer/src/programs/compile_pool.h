@@ -16,7 +16,8 @@
 #include <vector>
 
 #include "brdfa/result.h"
-#include "glsl_compiler.h"
+
+#include "programs/glsl_compiler.h"
 
 namespace brdfa {
 

@@ -1,4 +1,4 @@
-#include "host_resolve.h"
+#include "render/host_resolve.h"
 
 #include <algorithm>
 #include <array>

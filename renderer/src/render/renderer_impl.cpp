@@ -1,4 +1,4 @@
-#include "renderer_impl.h"
+#include "render/renderer_impl.h"
 
 #include <algorithm>
 #include <array>
@@ -15,18 +15,18 @@
 #include <sstream>
 #include <thread>
 
-#include "brdf_features.h"
-#include "device_activity.h"
-#include "remote_renderer.h"
-#include "environment_maps.h"
-#include "environment_sampling.h"
-#include "environment_preview.h"
-#include "meshes.h"
-#include "obj_loader.h"
-#include "worker_process.h"
-#include "render_view.h"
-#include "spirv_resources.h"
-#include "vk_check.h"
+#include "assets/environment_maps.h"
+#include "assets/environment_preview.h"
+#include "assets/environment_sampling.h"
+#include "assets/meshes.h"
+#include "assets/obj_loader.h"
+#include "device/device_activity.h"
+#include "device/vk_check.h"
+#include "isolation/remote_renderer.h"
+#include "isolation/worker_process.h"
+#include "programs/brdf_features.h"
+#include "programs/spirv_resources.h"
+#include "render/render_view.h"
 
 namespace brdfa {
 

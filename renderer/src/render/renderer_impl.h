@@ -13,17 +13,18 @@
 #include <unordered_map>
 
 #include "brdfa/renderer.h"
-#include "environment_maps.h"
-#include "compile_pool.h"
-#include "spirv_resources.h"
-#include "glsl_compiler.h"
-#include "image_decode.h"
-#include "memory_ledger.h"
-#include "meshes.h"
-#include "gpu_assets.h"
-#include "shader_sources.h"
-#include "spirv_disk_cache.h"
-#include "vk_context.h"
+
+#include "assets/environment_maps.h"
+#include "assets/gpu_assets.h"
+#include "assets/image_decode.h"
+#include "assets/meshes.h"
+#include "core/memory_ledger.h"
+#include "device/vk_context.h"
+#include "programs/compile_pool.h"
+#include "programs/glsl_compiler.h"
+#include "programs/shader_sources.h"
+#include "programs/spirv_disk_cache.h"
+#include "programs/spirv_resources.h"
 
 namespace brdfa {
 
