@@ -8,7 +8,7 @@
 #include <cstring>
 #include <string>
 
-#include "isolation/worker_process.h"
+#include "core/worker_process.h"
 #include "programs/compile_protocol.h"
 #include "programs/glsl_compiler.h"
 

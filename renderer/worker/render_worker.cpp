@@ -22,9 +22,9 @@
 #include "brdfa/heap_tuning.h"
 #include "brdfa/renderer.h"
 
+#include "core/worker_process.h"
 #include "device/device_activity.h"
 #include "isolation/render_wire.h"
-#include "isolation/worker_process.h"
 #include "programs/compile_protocol.h"
 #include "render/renderer_impl.h"
 

@@ -19,8 +19,8 @@
 #include <set>
 #include <thread>
 
+#include "core/worker_process.h"
 #include "isolation/render_wire.h"
-#include "isolation/worker_process.h"
 #include "programs/compile_protocol.h"
 
 namespace brdfa {

@@ -6,7 +6,7 @@
 #include <chrono>
 #include <cstdio>
 
-#include "isolation/worker_process.h"
+#include "core/worker_process.h"
 #include "programs/compile_protocol.h"
 
 namespace brdfa {

@@ -11,6 +11,7 @@
 
 #include "assets/gpu_assets.h"
 #include "core/scene_math.h"
+#include "programs/compute_kernel.h"
 #include "render/host_resolve.h"
 #include "render/pass_sizer.h"
 #include "render/renderer_impl.h"

@@ -20,10 +20,9 @@
 #include "assets/environment_sampling.h"
 #include "assets/meshes.h"
 #include "assets/obj_loader.h"
+#include "core/worker_process.h"
 #include "device/device_activity.h"
 #include "device/vk_check.h"
-#include "isolation/remote_renderer.h"
-#include "isolation/worker_process.h"
 #include "programs/brdf_features.h"
 #include "programs/spirv_resources.h"
 #include "render/render_view.h"
@@ -65,13 +64,6 @@ void evictOldest(Map& map, std::deque<uint64_t>& order) {
   }
 }
 }  // namespace
-
-Result<std::shared_ptr<Renderer>> Renderer::create(const RendererOptions& options) {
-  if (options.isolate) return createRemoteRenderer(options);
-  auto r = RendererImpl::create(options);
-  if (!r) return r.takeError();
-  return std::shared_ptr<Renderer>(std::move(r.value()));
-}
 
 Result<std::shared_ptr<RendererImpl>> RendererImpl::create(const RendererOptions& options) {
   std::shared_ptr<RendererImpl> r(new RendererImpl());

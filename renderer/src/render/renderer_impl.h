@@ -21,6 +21,7 @@
 #include "core/memory_ledger.h"
 #include "device/vk_context.h"
 #include "programs/compile_pool.h"
+#include "programs/compute_kernel.h"
 #include "programs/glsl_compiler.h"
 #include "programs/shader_sources.h"
 #include "programs/spirv_disk_cache.h"
