@@ -15,8 +15,7 @@ constexpr uint32_t kChunkSamples = 1024;  // samples per albedo replicate
 constexpr uint32_t kMaxPairs = 1u << 16;  // pairs per evaluateBrdf call
 constexpr uint32_t kMaxReplicates = 256;  // per view
 // Albedo evaluations per submission: each submission of an analysis runs under the pass budget
-// (RendererOptions::passSeconds) and holds the shared queue meanwhile, so they stay short
-// (about 0.1 s for Disney's BRDF on lavapipe).
+// (RendererOptions::passSeconds) and holds the shared queue meanwhile, so they stay short.
 constexpr uint64_t kSubmissionSamples = 1u << 18;
 
 std::vector<float> header(uint32_t mode, uint32_t items, uint32_t perChunk, uint32_t chunks) {

@@ -163,8 +163,8 @@ SamplerConfigResult measureConfig(const float* out, uint32_t ci, uint32_t sampli
   // of this test. Where the horizon cuts a lobe, or a half-vector sampler reaches those
   // directions only through the far tail of its distribution (grazing views), 1/pdf is so
   // heavy-tailed that finite-sample means and their error bars are unreliable (correct
-  // samplers read 30-75% low there: Ward at 80 and 89 degrees gave z up to 34). The
-  // chi-square test (with pdfBRDF) and the albedo comparison still cover those directions.
+  // samplers read far low there, with large z at grazing views). The chi-square test (with
+  // pdfBRDF) and the albedo comparison still cover those directions.
   const uint32_t firstRow = r.config.viewDeg > 45 ? 3 : 2;
   const bool cellTest = r.config.viewDeg <= 70;
   for (uint32_t c = 0; cellTest && c < kCells; ++c) {

@@ -35,8 +35,7 @@ struct GpuEnvironment {
   // entries, read with texelFetch at set 0 binding 9. Its reads are random, and on a CPU device
   // (lavapipe) they were most of a mis sample's cost: a texel buffer's fetch skips the 2D
   // addressing of an image, and 64-bit entries cost less than 128-bit ones (bench --only
-  // sampling: mis at 38-45 % of cosine's samples/s with an RGBA32F image, 51-54 % with an
-  // RG32UI image, 54-57 % with this buffer). A constant environment has only the header.
+  // sampling compares them). A constant environment has only the header.
   TexelBuffer table;
   std::shared_ptr<const EnvironmentDistribution> distribution;  // the same table on the host; null when constant
   MemoryReservation memory;  // its share of the renderer's memory budget

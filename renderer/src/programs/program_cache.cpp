@@ -14,8 +14,8 @@ namespace brdfa {
 namespace {
 constexpr size_t kMaxCachedPrograms = 256;
 // What one built shading pipeline is counted at against the memory budget: the worker's
-// resident memory grew by 3.8 MiB a pipeline over 13 pipelines on lavapipe (LLVM's machine code
-// and its bookkeeping); a GPU driver keeps less on the host.
+// resident memory grows by about this much a pipeline on lavapipe (LLVM's machine code and its
+// bookkeeping); a GPU driver keeps less on the host.
 constexpr uint64_t kPipelineBytesEstimate = 4ull << 20;
 
 template <class Map>

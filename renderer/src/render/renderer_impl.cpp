@@ -19,10 +19,10 @@ namespace brdfa {
 
 namespace {
 // What a device process grows by after start that no reservation names (llvmpipe's first
-// shading pipelines, the driver's caches): 38 MiB between start and the first frames of a
-// session at 128^2 (lavapipe, Mesa 22.3).
+// shading pipelines, the driver's caches), measured between start and a session's first frames
+// on lavapipe, with a margin.
 constexpr uint64_t kDriverGrowthBytes = 40ull << 20;
-// A brdfa-compile-worker between compiles: 33 MiB resident (glslang 11.13, Debian 12).
+// A brdfa-compile-worker's resident size between compiles, with a margin.
 constexpr uint64_t kIdleCompileWorkerBytes = 36ull << 20;
 // A fixed stage of the preview kernel: texCoord's declaration, the shading pieces, then `extra`.
 std::vector<std::string> previewStagePieces(const std::vector<std::string>& extra) {
@@ -104,10 +104,9 @@ Result<void> RendererImpl::createFixedKernels() {
 }
 
 void RendererImpl::reserveFixedMemory(const RendererOptions& options, size_t workers) {
-  // What the process holds now (driver, LLVM, fixed pipelines: ~70 MiB on lavapipe, and what it
-  // grows by unasked), and its
-  // compile workers idle are paid before any session, once for this process and once for each
-  // idle copy kept ready; what the compile workers may grow to while compiling, once.
+  // What the process holds now (driver, LLVM, fixed pipelines, and what it grows by unasked)
+  // and its compile workers idle are paid before any session, once for this process and once
+  // for each idle copy kept ready; what the compile workers may grow to while compiling, once.
   const uint64_t own = worker_process::residentBytes(::getpid()) + kDriverGrowthBytes;
   const uint64_t copies = 1 + uint64_t(options.spareProcesses);
   const uint64_t compileCap = uint64_t(options.compileMemoryMiB) << 20;
