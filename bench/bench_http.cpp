@@ -15,10 +15,11 @@
 #include <sstream>
 #include <thread>
 
-#include "bench_util.h"
-#include "bench_nonce.h"
-#include "class_breakdown.h"
 #include "brdfa/image_codec.h"
+
+#include "bench_nonce.h"
+#include "bench_util.h"
+#include "class_breakdown.h"
 #include "server_process.h"
 
 namespace brdfa::bench {

@@ -7,10 +7,11 @@
 #include <fstream>
 #include <sstream>
 
-#include "bench_util.h"
-#include "bench_nonce.h"
 #include "brdfa/image_codec.h"
 #include "brdfa/renderer.h"
+
+#include "bench_nonce.h"
+#include "bench_util.h"
 #include "minimal_kernel.h"
 
 namespace brdfa::bench {

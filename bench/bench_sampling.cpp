@@ -12,8 +12,9 @@
 #include <memory>
 #include <vector>
 
-#include "bench_util.h"
 #include "brdfa/renderer.h"
+
+#include "bench_util.h"
 
 namespace brdfa::bench {
 

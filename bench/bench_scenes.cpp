@@ -7,9 +7,10 @@
 #include <fstream>
 #include <sstream>
 
+#include "brdfa/renderer.h"
+
 #include "bench_nonce.h"
 #include "bench_util.h"
-#include "brdfa/renderer.h"
 
 namespace brdfa::bench {
 

@@ -9,10 +9,11 @@
 #include <cstdio>
 #include <vector>
 
+#include "brdfa/renderer.h"
+
 #include "bench_nonce.h"
 #include "bench_renderer.h"
 #include "bench_util.h"
-#include "brdfa/renderer.h"
 
 namespace brdfa::bench {
 

@@ -3,8 +3,9 @@
 // target) and one not (target 0), their passes interleaved so both see the same machine load.
 #include "bench_split.h"
 
-#include "bench_util.h"
 #include "brdfa/renderer.h"
+
+#include "bench_util.h"
 #include "minimal_kernel.h"
 
 namespace brdfa::bench {

@@ -5,11 +5,11 @@
 #include <fstream>
 #include <sstream>
 
-#include "environment_maps.h"
-#include "glsl_compiler.h"
-#include "vk_check.h"
-#include "vk_context.h"
-#include "vk_resources.h"
+#include "assets/environment_maps.h"
+#include "device/vk_check.h"
+#include "device/vk_context.h"
+#include "device/vk_resources.h"
+#include "programs/glsl_compiler.h"
 
 namespace brdfa::bench {
 

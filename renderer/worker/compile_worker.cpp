@@ -8,9 +8,9 @@
 #include <cstring>
 #include <string>
 
-#include "compile_protocol.h"
-#include "worker_process.h"
-#include "glsl_compiler.h"
+#include "core/worker_process.h"
+#include "programs/compile_protocol.h"
+#include "programs/glsl_compiler.h"
 
 
 int main(int argc, char** argv) {

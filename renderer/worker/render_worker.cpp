@@ -21,11 +21,12 @@
 
 #include "brdfa/heap_tuning.h"
 #include "brdfa/renderer.h"
-#include "compile_protocol.h"
-#include "device_activity.h"
-#include "render_wire.h"
-#include "renderer_impl.h"
-#include "worker_process.h"
+
+#include "core/worker_process.h"
+#include "device/device_activity.h"
+#include "isolation/render_wire.h"
+#include "programs/compile_protocol.h"
+#include "render/renderer_impl.h"
 
 namespace brdfa {
 namespace {
@@ -59,8 +60,8 @@ class Worker {
  private:
   // Requests run on threads of their own (a pass may wait on the device while the next request
   // is a scene change), taken from a pool: a new thread starts behind every running one on a
-  // loaded CPU (the scheduler's start debit), a waiting one is woken ahead. Under two busy
-  // loops on two cores, a slider change's frame took ~40 ms longer with a thread per request.
+  // loaded CPU (the scheduler's start debit), a waiting one is woken ahead: under busy loops, a
+  // thread per request made a slider change's frame slower.
   void dispatch(wire::Message request) {
     std::lock_guard lock(poolMutex_);
     queue_.push_back(Queued{std::move(request), std::chrono::steady_clock::now()});
@@ -144,7 +145,7 @@ class Worker {
   // AND this process has spent that much CPU time since the work started (or 3x its wall time
   // has passed, for a driver stuck without burning CPU). A machine loaded by other processes
   // stretches wall time, not CPU time: the first pass of a new program (which carries the
-  // driver's JIT) took over 1.5 s of wall time under a load of 6-8 on two cores and got its
+  // driver's JIT) ran past its wall-time budget on a heavily loaded machine and got its
   // program quarantined, while an endless loop keeps burning CPU and is caught as before.
   void watch(const RendererOptions& o) {
     const bool cpuDevice = renderer_->device().type == "cpu";

@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "brdfa/assets.h"
+
 #include "image_test_encoders.h"
 
 namespace brdfa {

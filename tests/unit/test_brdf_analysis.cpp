@@ -5,6 +5,7 @@
 #include <cmath>
 
 #include "brdfa/renderer.h"
+
 #include "device_test.h"
 
 namespace brdfa {

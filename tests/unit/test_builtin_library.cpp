@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "brdfa/renderer.h"
+
 #include "device_test.h"
 
 namespace brdfa {

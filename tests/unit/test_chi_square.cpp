@@ -5,7 +5,7 @@
 #include <cmath>
 #include <vector>
 
-#include "chi_square.h"
+#include "analysis/chi_square.h"
 
 namespace brdfa {
 namespace {

@@ -4,8 +4,8 @@
 
 #include <cmath>
 
-#include "environment_maps.h"
-#include "environment_sampling.h"
+#include "assets/environment_maps.h"
+#include "assets/environment_sampling.h"
 
 namespace brdfa {
 namespace {

@@ -19,10 +19,10 @@
 #include <string>
 #include <vector>
 
-#include "environment_maps.h"
-#include "equirect.h"
-#include "exr_decode.h"
-#include "image_decode.h"
+#include "assets/environment_maps.h"
+#include "assets/equirect.h"
+#include "assets/exr_decode.h"
+#include "assets/image_decode.h"
 #include "image_test_encoders.h"
 
 namespace brdfa {

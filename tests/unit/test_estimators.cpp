@@ -14,9 +14,10 @@
 #include <unistd.h>
 
 #include "brdfa/renderer.h"
+
+#include "core/scene_math.h"
 #include "device_test.h"
 #include "image_test_encoders.h"
-#include "scene_math.h"
 
 namespace brdfa {
 namespace {

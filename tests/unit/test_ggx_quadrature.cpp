@@ -15,10 +15,11 @@
 #include <sstream>
 
 #include "brdfa/renderer.h"
+
+#include "core/scene_math.h"
 #include "device_test.h"
 #include "ggx_albedo.h"
 #include "old_ggx_brdf.h"
-#include "scene_math.h"
 
 namespace brdfa {
 namespace {

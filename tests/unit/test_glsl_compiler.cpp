@@ -10,8 +10,9 @@
 #include <vector>
 
 #include "brdfa/brdf.h"
-#include "glsl_compiler.h"
-#include "program_assembler.h"
+
+#include "programs/glsl_compiler.h"
+#include "programs/program_assembler.h"
 
 namespace brdfa {
 namespace {

@@ -4,7 +4,7 @@
 #include <string>
 #include <vector>
 
-#include "image_decode.h"
+#include "assets/image_decode.h"
 #include "image_test_encoders.h"
 
 namespace brdfa {

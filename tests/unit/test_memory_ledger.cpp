@@ -5,7 +5,7 @@
 #include <thread>
 #include <vector>
 
-#include "memory_ledger.h"
+#include "core/memory_ledger.h"
 
 namespace brdfa {
 namespace {

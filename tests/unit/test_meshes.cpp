@@ -10,9 +10,9 @@
 #include <string>
 #include <vector>
 
-#include "mesh_frames.h"
-#include "meshes.h"
-#include "teapot_patches.h"
+#include "assets/mesh_frames.h"
+#include "assets/meshes.h"
+#include "assets/teapot_patches.h"
 
 namespace brdfa {
 namespace {

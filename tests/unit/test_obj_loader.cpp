@@ -8,8 +8,8 @@
 #include <random>
 #include <string>
 
-#include "mesh_frames.h"
-#include "obj_loader.h"
+#include "assets/mesh_frames.h"
+#include "assets/obj_loader.h"
 
 namespace brdfa {
 namespace {

@@ -7,8 +7,9 @@
 #include <vector>
 
 #include "brdfa/renderer.h"
+
 #include "device_test.h"
-#include "pass_sizer.h"
+#include "render/pass_sizer.h"
 
 namespace brdfa {
 namespace {

@@ -14,8 +14,9 @@
 #include <vector>
 
 #include "brdfa/renderer.h"
+
+#include "assets/environment_preview.h"
 #include "device_test.h"
-#include "environment_preview.h"
 
 namespace brdfa {
 namespace {

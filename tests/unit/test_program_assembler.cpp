@@ -7,9 +7,9 @@
 #include <string>
 #include <vector>
 
-#include "brdf_features.h"
-#include "glsl_compiler.h"
-#include "program_assembler.h"
+#include "programs/brdf_features.h"
+#include "programs/glsl_compiler.h"
+#include "programs/program_assembler.h"
 
 namespace brdfa {
 namespace {

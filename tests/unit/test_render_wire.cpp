@@ -5,7 +5,7 @@
 #include <cmath>
 #include <limits>
 
-#include "render_wire.h"
+#include "isolation/render_wire.h"
 
 namespace brdfa {
 namespace {

@@ -8,6 +8,7 @@
 #include <sstream>
 
 #include "brdfa/renderer.h"
+
 #include "device_test.h"
 
 namespace brdfa {

@@ -6,7 +6,8 @@
 #include <sstream>
 
 #include "brdfa/renderer.h"
-#include "host_resolve.h"
+
+#include "render/host_resolve.h"
 
 namespace brdfa {
 namespace {

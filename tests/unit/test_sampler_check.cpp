@@ -11,6 +11,7 @@
 #include <sstream>
 
 #include "brdfa/renderer.h"
+
 #include "old_ggx_brdf.h"
 
 namespace brdfa {

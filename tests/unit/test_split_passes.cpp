@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "brdfa/renderer.h"
+
 #include "device_test.h"
 
 namespace brdfa {

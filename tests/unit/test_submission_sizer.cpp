@@ -5,7 +5,7 @@
 #include <cmath>
 #include <limits>
 
-#include "submission_sizer.h"
+#include "render/submission_sizer.h"
 
 namespace brdfa {
 namespace {

@@ -11,9 +11,9 @@
 
 #include "brdfa/renderer.h"
 #include "device_test.h"
-#include "glsl_compiler.h"
-#include "program_assembler.h"
-#include "shader_sources.h"
+#include "programs/glsl_compiler.h"
+#include "programs/program_assembler.h"
+#include "programs/shader_sources.h"
 
 namespace brdfa {
 namespace {

@@ -32,8 +32,8 @@ struct RendererOptions {
   double submissionTargetMs = 50;
   // The target while no other view has used the queue in the last half second: then nobody
   // waits between submissions, and fewer of them save their wake-ups, which a loaded CPU makes
-  // costly (a slider change's frame took 137 ms instead of 109 under two busy loops on two
-  // cores). Kept far below the pass budget. 0: always submissionTargetMs.
+  // costly (a slider change's frame is slower under busy loops with the shorter target).
+  // Kept far below the pass budget. 0: always submissionTargetMs.
   double soloSubmissionTargetMs = 250;
   // SPIR-V cache on disk (empty: memory only). loadCache false only writes it (--no-cache-load).
   std::string cacheDir;
@@ -61,7 +61,7 @@ struct RendererOptions {
   // Isolation: the device lives in a supervised brdfa-render-worker process. A
   // pipeline build past buildSeconds, one queue submission of a pass or frame read past
   // passSeconds (passes are split into submissions of ~50 ms; a program's first submission also
-  // carries the driver's compile on lavapipe, ~0.6 s for Disney's BRDF), one submission of a
+  // carries the driver's compile on lavapipe, long for a large BRDF), one submission of a
   // check past checkSeconds, or the worker's resident memory past workerMemoryBytes, kills and
   // restarts the worker; the program that caused it is quarantined (its requests then fail
   // with RenderBudget naming the program and the budget) and every other view is restored from its scene on its
@@ -199,8 +199,8 @@ class RenderView {
   // (RenderSettings::previewPass) runs to its end. The next renderPass() or
   // readFrame() completes the interrupted pass with the same samples, unless a setScene() that
   // restarts accumulation drops it. setScene() withdraws a request no pass has taken yet.
-  // Never blocks. The first passes after a restart are split into short submissions (about
-  // 12 ms on lavapipe) so that this takes effect promptly while a user is changing the scene.
+  // Never blocks. The first passes after a restart are split into short submissions so that
+  // this takes effect promptly while a user is changing the scene.
   virtual void interruptPass() {}
 };
 

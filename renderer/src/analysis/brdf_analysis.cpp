@@ -4,7 +4,8 @@
 #include <cmath>
 #include <cstring>
 
-#include "renderer_impl.h"
+#include "analysis/check_kernel.h"
+#include "analysis/device_checks.h"
 
 namespace brdfa {
 
@@ -14,8 +15,7 @@ constexpr uint32_t kChunkSamples = 1024;  // samples per albedo replicate
 constexpr uint32_t kMaxPairs = 1u << 16;  // pairs per evaluateBrdf call
 constexpr uint32_t kMaxReplicates = 256;  // per view
 // Albedo evaluations per submission: each submission of an analysis runs under the pass budget
-// (RendererOptions::passSeconds) and holds the shared queue meanwhile, so they stay short
-// (about 0.1 s for Disney's BRDF on lavapipe).
+// (RendererOptions::passSeconds) and holds the shared queue meanwhile, so they stay short.
 constexpr uint64_t kSubmissionSamples = 1u << 18;
 
 std::vector<float> header(uint32_t mode, uint32_t items, uint32_t perChunk, uint32_t chunks) {
@@ -33,8 +33,11 @@ const char* albedoEstimatorName(const BrdfDefinition& brdf) {
   return brdf.hasSampler() ? "brdf sampler" : "cosine + half-vector mixture";
 }
 
-Result<std::vector<Vec3>> RendererImpl::evaluateBrdf(const BrdfDefinition& brdf, const std::vector<ParamSetting>& settings,
-                                                     const std::vector<DirectionPair>& pairs) {
+namespace analysis {
+
+Result<std::vector<Vec3>> evaluateBrdf(const CheckDevice& device, const BrdfDefinition& brdf,
+                                       const std::vector<ParamSetting>& settings,
+                                       const std::vector<DirectionPair>& pairs) {
   if (pairs.empty() || settings.empty()) return std::vector<Vec3>{};
   if (pairs.size() > kMaxPairs)
     return makeError(ErrorCode::InvalidArgument, "at most " + std::to_string(kMaxPairs) + " direction pairs per call");
@@ -46,17 +49,16 @@ Result<std::vector<Vec3>> RendererImpl::evaluateBrdf(const BrdfDefinition& brdf,
   }
   std::vector<Vec3> values;
   values.reserve(size_t(n) * settings.size());
-  auto ran = runCheckKernel(brdf, "analysis.comp.glsl", n, n, settings, [&](const float* out) {
+  auto ran = runCheckKernel(device, brdf, "analysis.comp.glsl", n, n, settings, [&](const float* out) {
     for (uint32_t p = 0; p < n; ++p) values.push_back({out[4 * p], out[4 * p + 1], out[4 * p + 2]});
   }, input);
   if (!ran) return ran.takeError();
   return values;
 }
 
-Result<std::vector<AlbedoEstimate>> RendererImpl::estimateAlbedo(const BrdfDefinition& brdf,
-                                                                 const std::vector<ParamSetting>& settings,
-                                                                 const std::vector<Vec3>& views,
-                                                                 uint32_t samplesPerView) {
+Result<std::vector<AlbedoEstimate>> estimateAlbedo(const CheckDevice& device, const BrdfDefinition& brdf,
+                                                   const std::vector<ParamSetting>& settings,
+                                                   const std::vector<Vec3>& views, uint32_t samplesPerView) {
   if (views.empty() || settings.empty()) return std::vector<AlbedoEstimate>{};
   // Two replicates at least: their spread is the error bar.
   const uint32_t chunks = std::clamp<uint32_t>((samplesPerView + kChunkSamples - 1) / kChunkSamples, 2, kMaxReplicates);
@@ -67,7 +69,7 @@ Result<std::vector<AlbedoEstimate>> RendererImpl::estimateAlbedo(const BrdfDefin
     std::vector<float> input = header(1, count, kChunkSamples, chunks);
     for (uint32_t v = 0; v < count; ++v) append(input, views[first + v]);
     size_t setting = 0;
-    auto ran = runCheckKernel(brdf, "analysis.comp.glsl", count * chunks, count * chunks, settings, [&](const float* o) {
+    auto ran = runCheckKernel(device, brdf, "analysis.comp.glsl", count * chunks, count * chunks, settings, [&](const float* o) {
       for (uint32_t v = 0; v < count; ++v) {
         double sum[3] = {0, 0, 0}, sumSq[3] = {0, 0, 0};
         AlbedoEstimate& e = out[setting * views.size() + first + v];
@@ -94,5 +96,7 @@ Result<std::vector<AlbedoEstimate>> RendererImpl::estimateAlbedo(const BrdfDefin
   }
   return out;
 }
+
+}  // namespace analysis
 
 }  // namespace brdfa

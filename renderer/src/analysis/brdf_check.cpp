@@ -1,122 +1,17 @@
-// Numeric checks of a BRDF and of its sampler on the device (BrdfCheckReport and
-// SamplerCheckReport in renderer.h; shaders/kernels/check*.comp.glsl).
-#include <array>
+// Renderer::checkBrdf: numeric checks of a BRDF on the device (BrdfCheckReport in renderer.h;
+// shaders/kernels/check.comp.glsl).
 #include <chrono>
 #include <cmath>
 #include <cstdio>
-#include <cstring>
-#include <iterator>
 
-#include "brdf_features.h"
-#include "chi_square.h"
-#include "renderer_impl.h"
-#include "vk_check.h"
+#include "analysis/check_kernel.h"
+#include "analysis/device_checks.h"
 
 namespace brdfa {
 
 namespace {
 
 constexpr uint32_t kViews = 40;  // BRDFA_VIEWS in check.comp.glsl
-// check_sampler.comp.glsl: per configuration kSamplerChunks invocations of kChunkSamples draws,
-// each writing 128 cells + 3 summary vec4 + the chi-square histogram of 10 x 20 cells (four
-// counts to a vec4); then, with pdfBRDF, one invocation per 4 chi-square cells and
-// configuration computing their probabilities.
-constexpr uint32_t kSamplerChunks = 8, kChunkSamples = 2048, kCells = 128, kSummaryVec4s = 3;
-constexpr uint32_t kChi2Cells = 10 * 20, kChi2Vec4s = kChi2Cells / 4;
-constexpr uint32_t kSamplerStride = kCells + kSummaryVec4s + kChi2Vec4s;
-constexpr double kChi2Significance = 0.01;  // pbrt-v4's CHI2_SLEVEL, before the Sidak correction
-constexpr double kChi2MinExpected = 5.0;    // pbrt-v4's CHI2_MINFREQ: smaller cells are pooled
-constexpr double kZLimit = 5.0;             // SamplerCheckReport::passed's default
-constexpr double kPi = 3.14159265358979323846;
-
-using D3 = std::array<double, 3>;
-D3 add(const D3& a, const D3& b) { return {a[0] + b[0], a[1] + b[1], a[2] + b[2]}; }
-D3 scaled(const D3& a, double s) { return {a[0] * s, a[1] * s, a[2] * s}; }
-double dot(const D3& a, const D3& b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
-D3 cross(const D3& a, const D3& b) {
-  return {a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]};
-}
-D3 normalized(const D3& a) { return scaled(a, 1.0 / std::sqrt(dot(a, a))); }
-Vec3 toFloat(const D3& a) { return {float(a[0]), float(a[1]), float(a[2])}; }
-
-// The configurations of checkSampler: shading normals of every kind a mesh gives the integrator
-// (exactly on an axis; within 1e-3 rad of each axis, where frame constructions that branch on
-// a component of N switch; a few degrees from +-z, inside the usual |N.z| > 0.999 branch;
-// arbitrary), each with X, Y orthonormal around N (built in double, turned by a different angle
-// about N per normal; one frame left-handed, as mirrored UVs give), and views at 0, 30, 60, 80
-// and 89 degrees from N at azimuths that vary with the normal and the angle (eight in all).
-std::vector<SamplerCheckConfig> samplerConfigs() {
-  struct Normal {
-    std::string label;
-    D3 n;
-  };
-  const double e = 1e-3;
-  std::vector<Normal> normals = {{"+z", {0, 0, 1}}, {"-z", {0, 0, -1}}};
-  const char* axisNames[3] = {"x", "y", "z"};
-  for (int axis = 0; axis < 3; ++axis)
-    for (double sign : {1.0, -1.0}) {
-      // Offset towards both other axes (weights 1 and 0.7): a frame code that branches on one
-      // component and forgets to orthogonalise against the other is caught either way.
-      D3 a{0, 0, 0}, d{0, 0, 0};
-      a[axis] = sign;
-      d[(axis + 1) % 3] = 1.0;
-      d[(axis + 2) % 3] = 0.7;
-      d = normalized(d);
-      normals.push_back({std::string("near ") + (sign > 0 ? "+" : "-") + axisNames[axis] + " (1e-3 rad)",
-                         normalized(add(scaled(a, std::cos(e)), scaled(d, std::sin(e))))});
-    }
-  auto tilted = [](double deg, double azimuthDeg, double zSign) {
-    double t = deg * kPi / 180, p = azimuthDeg * kPi / 180;
-    return D3{std::sin(t) * std::cos(p), std::sin(t) * std::sin(p), zSign * std::cos(t)};
-  };
-  normals.push_back({"2 deg from +z", tilted(2.0, 30.0, 1.0)});
-  normals.push_back({"1.5 deg from -z", tilted(1.5, 200.0, -1.0)});
-  normals.push_back({"arbitrary", normalized({1, 2, 3})});
-  normals.push_back({"arbitrary", normalized({-0.8, 0.1, -0.6})});
-  normals.push_back({"arbitrary, left-handed X, Y", normalized({0.2, -0.9, 0.4})});
-
-  const double viewDegs[] = {0, 30, 60, 80, 89};
-  std::vector<SamplerCheckConfig> configs;
-  for (size_t i = 0; i < normals.size(); ++i) {
-    const D3 n = normals[i].n;
-    D3 x{1, 0, 0}, y{0, 1, 0};
-    if (i != 0) {  // +z keeps the frame of the original check (X = +x, Y = +y)
-      // The axis least aligned with N, made orthogonal to it, then turned about N.
-      int least = 0;
-      for (int k = 1; k < 3; ++k)
-        if (std::fabs(n[k]) < std::fabs(n[least])) least = k;
-      D3 h{0, 0, 0};
-      h[least] = 1;
-      D3 x0 = normalized(add(h, scaled(n, -dot(h, n))));
-      D3 y0 = cross(n, x0);
-      double psi = (25.0 * double(i)) * kPi / 180;
-      x = add(scaled(x0, std::cos(psi)), scaled(y0, std::sin(psi)));
-      y = cross(n, x);
-      // Mirrored tangent frames (negative handedness) give the integrator Y = -(N x X).
-      if (normals[i].label.find("left-handed") != std::string::npos) y = scaled(y, -1.0);
-    }
-    for (size_t k = 0; k < std::size(viewDegs); ++k) {
-      SamplerCheckConfig c;
-      c.normalLabel = normals[i].label;
-      c.viewDeg = viewDegs[k];
-      c.viewAzimuthDeg = viewDegs[k] == 0 ? 0 : 45.0 * double((i + 3 * k) % 8);
-      double t = c.viewDeg * kPi / 180, p = c.viewAzimuthDeg * kPi / 180;
-      D3 v = add(scaled(n, std::cos(t)), scaled(add(scaled(x, std::cos(p)), scaled(y, std::sin(p))), std::sin(t)));
-      c.normal = toFloat(n);
-      c.tangent = toFloat(x);
-      c.bitangent = toFloat(y);
-      c.view = toFloat(v);
-      configs.push_back(c);
-    }
-  }
-  return configs;
-}
-
-std::string formatG(double v) {
-  char buf[32];
-  std::snprintf(buf, sizeof buf, "%.3g", v);
-  return buf;
-}
 
 // The parameter settings checked: all defaults, then each parameter alone at its minimum and
 // its maximum (colors at black and white, bools at false and true).
@@ -132,113 +27,6 @@ std::vector<std::map<std::string, Vec3>> checkSettings(const BrdfDefinition& brd
   return settings;
 }
 
-struct PoolOwner {
-  VkDevice device = VK_NULL_HANDLE;
-  VkDescriptorPool pool = VK_NULL_HANDLE;
-  ~PoolOwner() {
-    if (pool) vkDestroyDescriptorPool(device, pool, nullptr);
-  }
-};
-
-// z-score of a mean estimated from n samples with the given sums against `expected`.
-double zScore(double sum, double sumSq, double n, double expected) {
-  double mean = sum / n;
-  double var = std::max(sumSq / n - mean * mean, 0.0) / std::max(n - 1.0, 1.0);
-  double diff = mean - expected;
-  if (var <= 0) return diff == 0 ? 0 : INFINITY;
-  return std::fabs(diff) / std::sqrt(var);
-}
-
-}  // namespace
-
-Result<void> RendererImpl::runCheckKernel(const BrdfDefinition& brdf, const char* kernelName, uint32_t invocations,
-                                          uint32_t outputVec4s,
-                                          const std::vector<std::map<std::string, Vec3>>& settings,
-                                          const std::function<void(const float*)>& consume,
-                                          const std::vector<float>& input, const GpuEnvironment* env) {
-  if (brdf.format == BrdfFormat::Legacy)
-    return makeError(ErrorCode::Unsupported, "legacy render() BRDFs are rendered, not analysed");
-  auto kernel = compiledKernel(assembleCheckProgram(brdf, kernelName));
-  if (!kernel) return kernel.takeError();
-  const ParamBlockLayout& layout = (*kernel)->params;
-  VkContext& ctx = *ctx_;
-  auto output = Buffer::create(ctx, VkDeviceSize(outputVec4s) * 16, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, true);
-  if (!output) return output.takeError();
-  auto params = Buffer::create(ctx, layout.size, VK_BUFFER_USAGE_UNIFORM_BUFFER_BIT, true);
-  if (!params) return params.takeError();
-  // The kernel's input (read-only, binding 0); without one, the output stands in there.
-  Buffer inputBuffer;
-  if (!input.empty()) {
-    auto in = Buffer::create(ctx, VkDeviceSize(input.size()) * sizeof(float), VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, true);
-    if (!in) return in.takeError();
-    std::memcpy(in->mapped(), input.data(), input.size() * sizeof(float));
-    inputBuffer = std::move(in.value());
-  }
-  auto cmd = CommandContext::create(ctx);
-  if (!cmd) return cmd.takeError();
-  auto furnace = environment("furnace");
-  if (!furnace) return furnace.takeError();
-
-  // Set 0 carries the output in the accumulator binding (3); set 1 the parameter block.
-  PoolOwner res;
-  res.device = ctx.device();
-  VkDescriptorPoolSize sizes[4] = {{VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 7},
-                                   {VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, 5},
-                                   {VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, 2},
-                                   {VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER, 1}};
-  VkDescriptorPoolCreateInfo pci{VK_STRUCTURE_TYPE_DESCRIPTOR_POOL_CREATE_INFO};
-  pci.maxSets = 2;
-  pci.poolSizeCount = 4;
-  pci.pPoolSizes = sizes;
-  BRDFA_VK_TRY(vkCreateDescriptorPool(ctx.device(), &pci, nullptr, &res.pool));
-  VkDescriptorSetLayout layouts[2] = {viewSetLayout_, objectSetLayout_};
-  VkDescriptorSetAllocateInfo ai{VK_STRUCTURE_TYPE_DESCRIPTOR_SET_ALLOCATE_INFO};
-  ai.descriptorPool = res.pool;
-  ai.descriptorSetCount = 2;
-  ai.pSetLayouts = layouts;
-  VkDescriptorSet sets[2];
-  BRDFA_VK_TRY(vkAllocateDescriptorSets(ctx.device(), &ai, sets));
-  // Every binding gets a valid resource, used or not: lavapipe reads all bindings of a bound
-  // set at dispatch and crashed on unwritten ones. The output stands in for the unused storage
-  // buffers, the furnace for the environment, the parameters for the unused transform, white
-  // for the textures. A kernel input, when given, takes binding 0 (the G-buffer's, read-only).
-  VkDescriptorBufferInfo outInfo{output->handle(), 0, VK_WHOLE_SIZE};
-  VkDescriptorBufferInfo inInfo{input.empty() ? output->handle() : inputBuffer.handle(), 0, VK_WHOLE_SIZE};
-  VkDescriptorBufferInfo paramInfo{params->handle(), 0, VK_WHOLE_SIZE};
-  if (!env) env = furnace->get();
-  VkDescriptorImageInfo envInfo{envSampler_, env->cube.view(), VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL};
-  const VkBufferView tableView = env->table.view();
-  std::vector<VkWriteDescriptorSet> writes;
-  for (uint32_t binding : {0u, 3u, 4u, 6u, 7u, 8u, 12u})
-    writes.push_back({VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET, nullptr, sets[0], binding, 0, 1,
-                      VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, nullptr, binding == 0 ? &inInfo : &outInfo, nullptr});
-  writes.push_back({VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET, nullptr, sets[0], 9, 0, 1,
-                    VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER, nullptr, nullptr, &tableView});
-  writes.push_back({VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET, nullptr, sets[0], 5, 0, 1,
-                    VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, &envInfo, nullptr, nullptr});
-  for (uint32_t binding : {0u, 1u})
-    writes.push_back({VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET, nullptr, sets[1], binding, 0, 1,
-                      VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, nullptr, &paramInfo, nullptr});
-  vkUpdateDescriptorSets(ctx.device(), static_cast<uint32_t>(writes.size()), writes.data(), 0, nullptr);
-  writeDefaultTextures(sets[1]);  // textures read as white, the neutral value of docs/design.md
-
-  for (const auto& setting : settings) {
-    std::vector<uint8_t> packed = layout.pack(brdf, setting);
-    std::memcpy(params->mapped(), packed.data(), packed.size());
-    auto cb = cmd->begin();
-    if (!cb) return cb.takeError();
-    vkCmdBindPipeline(*cb, VK_PIPELINE_BIND_POINT_COMPUTE, (*kernel)->kernel->pipeline());
-    vkCmdBindDescriptorSets(*cb, VK_PIPELINE_BIND_POINT_COMPUTE, computeLayout_, 0, 2, sets, 0, nullptr);
-    vkCmdDispatch(*cb, (invocations + 7) / 8, 1, 1);
-    memoryBarrier(*cb, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_ACCESS_SHADER_WRITE_BIT, VK_PIPELINE_STAGE_HOST_BIT,
-                  VK_ACCESS_HOST_READ_BIT);
-    BRDFA_TRY(cmd->submitAndWait());
-    consume(static_cast<const float*>(output->mapped()));
-  }
-  return {};
-}
-
-namespace {
 // The check kernel's grid (check.comp.glsl): polar angles of V and L, azimuths 45 degrees apart.
 constexpr double kCheckThetaDeg[10] = {0.0, 15.0, 30.0, 45.0, 60.0, 75.0, 85.0, 89.0, 89.9, 90.0};
 
@@ -264,9 +52,7 @@ std::string describeSetting(const std::map<std::string, Vec3>& setting, const Br
   }
   return out + " (others at their defaults)";
 }
-}  // namespace
 
-namespace {
 // The three properties a file may claim, judged against BrdfCheckReport's limits.
 std::vector<ClaimVerdict> claimVerdicts(const BrdfCheckReport& r, const BrdfClaims& claims) {
   std::vector<ClaimVerdict> out(3);
@@ -285,12 +71,14 @@ std::vector<ClaimVerdict> claimVerdicts(const BrdfCheckReport& r, const BrdfClai
 }
 }  // namespace
 
-Result<BrdfCheckReport> RendererImpl::checkBrdf(const BrdfDefinition& brdf) {
+namespace analysis {
+
+Result<BrdfCheckReport> checkBrdf(const CheckDevice& device, const BrdfDefinition& brdf) {
   const auto t0 = std::chrono::steady_clock::now();
   BrdfCheckReport report;
   const std::vector<std::map<std::string, Vec3>> settings = checkSettings(brdf);
   size_t setting = 0;  // consume() is called once per setting, in order
-  auto ran = runCheckKernel(brdf, "check.comp.glsl", kViews, kViews * 4, settings, [&](const float* out) {
+  auto ran = runCheckKernel(device, brdf, "check.comp.glsl", kViews, kViews * 4, settings, [&](const float* out) {
     const std::string where = describeSetting(settings[setting++], brdf);
     for (uint32_t v = 0; v < kViews; ++v) {
       const float* counts = out + 16 * v;
@@ -333,162 +121,6 @@ Result<BrdfCheckReport> RendererImpl::checkBrdf(const BrdfDefinition& brdf) {
   return report;
 }
 
-std::string SamplerCheckConfig::describe() const {
-  char buf[160];
-  std::snprintf(buf, sizeof buf, "normal %s (%.6g, %.6g, %.6g), view %g deg at azimuth %g deg", normalLabel.c_str(),
-                normal[0], normal[1], normal[2], viewDeg, viewAzimuthDeg);
-  return buf;
-}
-
-Result<SamplerCheckReport> RendererImpl::checkSampler(const BrdfDefinition& brdf) {
-  if (!brdf.hasSampler()) return makeError(ErrorCode::InvalidArgument, "the BRDF has no '::begin sample' section");
-  const auto t0 = std::chrono::steady_clock::now();
-  SamplerCheckReport report;
-  const std::vector<SamplerCheckConfig> configs = samplerConfigs();
-  const uint32_t nConfigs = static_cast<uint32_t>(configs.size());
-  // The same detection decides BRDFA_HAS_PDF in assembleCheckProgram.
-  report.chi2Run = detectFeatures(brdf).samplerPdf;
-  if (report.chi2Run) report.chi2Threshold = sidakSignificance(kChi2Significance, int(nConfigs));
-  const uint32_t samplingInvocations = nConfigs * kSamplerChunks;
-  const uint32_t expectedInvocations = nConfigs * kChi2Vec4s;
-  const uint32_t invocations = samplingInvocations + (report.chi2Run ? expectedInvocations : 0);
-  const uint32_t outputVec4s = samplingInvocations * kSamplerStride + expectedInvocations;
-  const double perConfig = double(kSamplerChunks) * kChunkSamples;
-  const double cellSolidAngle = 2.0 * kPi / kCells;
-  report.configurations = nConfigs;
-  report.samplesPerConfiguration = static_cast<uint64_t>(perConfig);
-
-  // The kernel's input (check_sampler.comp.glsl): a header of counts, then N, X, Y, V per configuration.
-  std::vector<float> input(4 + 16 * size_t(nConfigs), 0.0f);
-  const uint32_t header[3] = {nConfigs, kSamplerChunks, kChunkSamples};
-  std::memcpy(input.data(), header, sizeof header);
-  for (uint32_t c = 0; c < nConfigs; ++c) {
-    const Vec3* vectors[4] = {&configs[c].normal, &configs[c].tangent, &configs[c].bitangent, &configs[c].view};
-    for (int k = 0; k < 4; ++k)
-      for (int j = 0; j < 3; ++j) input[4 + 16 * c + 4 * k + j] = (*vectors[k])[j];
-  }
-
-  auto ran = runCheckKernel(brdf, "check_sampler.comp.glsl", invocations, outputVec4s, {{}},
-                            [&](const float* out) {
-    for (uint32_t ci = 0; ci < nConfigs; ++ci) {
-      SamplerConfigResult r;
-      r.config = configs[ci];
-      std::vector<double> cells(3 * kCells, 0.0);
-      std::vector<double> observed(kChi2Cells, 0.0);
-      double albedo[4] = {0, 0, 0, 0};  // sampled sum, sum of squares; cosine sum, sum of squares
-      for (uint32_t chunk = 0; chunk < kSamplerChunks; ++chunk) {
-        const float* base = out + 4 * size_t((ci * kSamplerChunks + chunk) * kSamplerStride);
-        for (uint32_t c = 0; c < kCells; ++c)
-          for (int k = 0; k < 3; ++k) cells[3 * c + k] += base[4 * c + k];
-        const float* summary = base + 4 * kCells;
-        r.rejected += static_cast<uint64_t>(summary[0]);
-        r.maxValueMismatch = std::max(r.maxValueMismatch, double(summary[1]));
-        albedo[0] += summary[2];
-        albedo[1] += summary[3];
-        albedo[2] += summary[4];
-        albedo[3] += summary[5];
-        r.maxPdfMismatch = std::max(r.maxPdfMismatch, double(summary[6]));
-        r.maxLengthError = std::max(r.maxLengthError, double(summary[8]));
-        r.pdfBelowHorizon += static_cast<uint64_t>(summary[9]);
-        const float* histogram = summary + 4 * kSummaryVec4s;
-        for (uint32_t c = 0; c < kChi2Cells; ++c) observed[c] += histogram[c];
-      }
-      report.samples += static_cast<uint64_t>(perConfig);
-      // Cells of the two rows next to the horizon (cos theta < 1/4) are left out, and at views
-      // beyond 45 degrees also the third (cos theta < 3/8); views beyond 70 degrees are left out
-      // of this test. Where the horizon cuts a lobe, or a half-vector sampler reaches those
-      // directions only through the far tail of its distribution (grazing views), 1/pdf is so
-      // heavy-tailed that finite-sample means and their error bars are unreliable (correct
-      // samplers read 30-75% low there: Ward at 80 and 89 degrees gave z up to 34). The
-      // chi-square test (with pdfBRDF) and the albedo comparison still cover those directions.
-      const uint32_t firstRow = r.config.viewDeg > 45 ? 3 : 2;
-      const bool cellTest = r.config.viewDeg <= 70;
-      for (uint32_t c = 0; cellTest && c < kCells; ++c) {
-        if (cells[3 * c] < 100) continue;  // too few samples to say anything
-        if (c / 16 < firstRow) continue;
-        ++report.cellsTested;
-        r.maxCellZ = std::max(r.maxCellZ, zScore(cells[3 * c + 1], cells[3 * c + 2], perConfig, cellSolidAngle));
-      }
-      // Two independent estimates of one albedo: z of their difference.
-      auto meanVar = [&](double sum, double sumSq) {
-        double mean = sum / perConfig;
-        return std::pair<double, double>(mean, std::max(sumSq / perConfig - mean * mean, 0.0) / (perConfig - 1));
-      };
-      auto [ms, vs] = meanVar(albedo[0], albedo[1]);
-      auto [mc, vc] = meanVar(albedo[2], albedo[3]);
-      double sd = std::sqrt(vs + vc);
-      r.albedoZ = sd > 0 ? std::fabs(ms - mc) / sd : (ms == mc ? 0.0 : INFINITY);
-
-      if (report.chi2Run) {
-        // Expected counts: each cell's probability under pdfBRDF times every draw of the
-        // configuration, rejected ones included (a sampler that rejects more than its pdf says
-        // comes up short in every cell). The cells cover the upper hemisphere only; the mass
-        // pdfBRDF puts below it is what the rejected draws should carry, and is not a cell.
-        const float* probability = out + 4 * size_t(samplingInvocations * kSamplerStride + ci * kChi2Vec4s);
-        std::vector<double> expected(kChi2Cells);
-        for (uint32_t c = 0; c < kChi2Cells; ++c) expected[c] = double(probability[c]) * perConfig;
-        ChiSquareResult chi2 = chiSquareTest(observed, expected, kChi2MinExpected);
-        r.chi2Failure = chi2.failure;
-        r.chi2PValue = chi2.pValue;  // 0 on failure, never NaN
-      }
-
-      // This configuration's check nearest to its limit (severity = value / limit).
-      auto consider = [&](const char* check, double value, double severity) {
-        if (!(severity <= 1e300)) severity = 1e300;  // NaN or inf: as bad as it gets
-        if (r.worstCheck.empty() || severity > r.worstSeverity) {
-          r.worstCheck = check;
-          r.worstValue = value;
-          r.worstSeverity = severity;
-        }
-      };
-      consider("value", r.maxValueMismatch, r.maxValueMismatch / SamplerCheckReport::kValueLimit);
-      consider("cell z", r.maxCellZ, r.maxCellZ / kZLimit);
-      consider("albedo z", r.albedoZ, r.albedoZ / kZLimit);
-      consider("length", r.maxLengthError, r.maxLengthError / SamplerCheckReport::kLengthLimit);
-      consider("pdf below horizon", double(r.pdfBelowHorizon), r.pdfBelowHorizon > 0 ? 1.0 + r.pdfBelowHorizon : 0.0);
-      if (report.chi2Run) {
-        consider("pdf mismatch", r.maxPdfMismatch, r.maxPdfMismatch / SamplerCheckReport::kPdfLimit);
-        double sev = r.chi2PValue >= 1 ? 0.0 : std::log(r.chi2PValue) / std::log(report.chi2Threshold);
-        consider("chi2", r.chi2PValue, sev);
-      }
-
-      report.rejected += r.rejected;
-      report.maxValueMismatch = std::max(report.maxValueMismatch, r.maxValueMismatch);
-      report.maxCellZ = std::max(report.maxCellZ, r.maxCellZ);
-      report.maxAlbedoZ = std::max(report.maxAlbedoZ, r.albedoZ);
-      report.maxLengthError = std::max(report.maxLengthError, r.maxLengthError);
-      report.pdfBelowHorizon += r.pdfBelowHorizon;
-      if (report.chi2Run) {
-        report.maxPdfMismatch = std::max(report.maxPdfMismatch, r.maxPdfMismatch);
-        if (!r.chi2Failure.empty() && report.chi2Failure.empty())
-          report.chi2Failure = r.config.describe() + ": " + r.chi2Failure;
-        report.minChi2PValue = std::min(report.minChi2PValue, r.chi2PValue);
-        report.chi2PValues.push_back(r.chi2PValue);
-      }
-      if (report.configs.empty() || r.worstSeverity > report.worstSeverity) {
-        report.worstConfig = report.configs.size();
-        report.worstCheck = r.worstCheck;
-        report.worstValue = r.worstValue;
-        report.worstSeverity = r.worstSeverity;
-      }
-      report.configs.push_back(std::move(r));
-    }
-  }, input);
-  if (!ran) return ran.takeError();
-  if (!report.configs.empty()) {
-    const SamplerConfigResult& w = report.configs[report.worstConfig];
-    std::string limit;
-    if (w.worstCheck == "value") limit = formatG(SamplerCheckReport::kValueLimit);
-    else if (w.worstCheck == "cell z" || w.worstCheck == "albedo z") limit = formatG(kZLimit);
-    else if (w.worstCheck == "length") limit = formatG(SamplerCheckReport::kLengthLimit);
-    else if (w.worstCheck == "pdf mismatch") limit = formatG(SamplerCheckReport::kPdfLimit);
-    else if (w.worstCheck == "chi2") limit = "p >= " + formatG(report.chi2Threshold);
-    else limit = "0";
-    report.worst = w.config.describe() + ": " + w.worstCheck + " " + formatG(w.worstValue) + " (limit " + limit + ")";
-    if (w.worstCheck == "chi2" && !w.chi2Failure.empty()) report.worst += ", " + w.chi2Failure;
-  }
-  report.ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
-  return report;
-}
+}  // namespace analysis
 
 }  // namespace brdfa

@@ -1,4 +1,4 @@
-#include "chi_square.h"
+#include "analysis/chi_square.h"
 
 #include <algorithm>
 #include <cmath>

@@ -2,9 +2,10 @@
 #include <algorithm>
 #include <cmath>
 
-#include "chi_square.h"
-#include "environment_maps.h"
-#include "renderer_impl.h"
+#include "analysis/check_kernel.h"
+#include "analysis/chi_square.h"
+#include "analysis/device_checks.h"
+#include "assets/environment_maps.h"
 
 namespace brdfa {
 
@@ -25,8 +26,10 @@ vec3 BRDF(vec3 L, vec3 V, vec3 N, vec3 X, vec3 Y) { return vec3(0.0); }
 
 }  // namespace
 
-Result<EnvironmentSamplerReport> RendererImpl::checkEnvironmentSampler(const std::string& name) {
-  auto env = environment(name);
+namespace analysis {
+
+Result<EnvironmentSamplerReport> checkEnvironmentSampler(const CheckDevice& device, const std::string& name) {
+  auto env = device.assets.environment(name);
   if (!env) return env.takeError();
   const std::shared_ptr<const EnvironmentDistribution> dist = (*env)->distribution;
   if (!dist)
@@ -36,7 +39,7 @@ Result<EnvironmentSamplerReport> RendererImpl::checkEnvironmentSampler(const std
   if (!carrier) return carrier.takeError();
   std::vector<float> draws;
   auto ran = runCheckKernel(
-      carrier.value(), "check_environment.comp.glsl", kDraws, 2 * kDraws, {{}},
+      device, carrier.value(), "check_environment.comp.glsl", kDraws, 2 * kDraws, {{}},
       [&](const float* out) { draws.assign(out, out + 8 * size_t(kDraws)); }, {}, env->get());
   if (!ran) return ran.takeError();
 
@@ -112,5 +115,7 @@ Result<EnvironmentSamplerReport> RendererImpl::checkEnvironmentSampler(const std
   }
   return report;
 }
+
+}  // namespace analysis
 
 }  // namespace brdfa

@@ -1,7 +1,7 @@
 #include "brdfa/assets.h"
 
-#include "image_decode.h"
-#include "obj_loader.h"
+#include "assets/image_decode.h"
+#include "assets/obj_loader.h"
 
 namespace brdfa {
 

@@ -1,4 +1,4 @@
-#include "cross_cubemap.h"
+#include "assets/cross_cubemap.h"
 
 #include <algorithm>
 #include <array>

@@ -24,7 +24,7 @@
 #include <cstdint>
 #include <string>
 
-#include "environment_maps.h"
+#include "assets/environment_maps.h"
 
 namespace brdfa {
 

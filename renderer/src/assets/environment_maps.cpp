@@ -1,4 +1,4 @@
-#include "environment_maps.h"
+#include "assets/environment_maps.h"
 
 #include <glm/glm.hpp>
 #include <glm/gtc/constants.hpp>

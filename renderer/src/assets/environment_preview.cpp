@@ -1,4 +1,4 @@
-#include "environment_preview.h"
+#include "assets/environment_preview.h"
 
 #include <glm/gtc/packing.hpp>
 

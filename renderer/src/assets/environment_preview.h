@@ -5,7 +5,7 @@
 #include <cstdint>
 #include <vector>
 
-#include "environment_maps.h"
+#include "assets/environment_maps.h"
 
 namespace brdfa {
 

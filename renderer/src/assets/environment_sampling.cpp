@@ -1,4 +1,4 @@
-#include "environment_sampling.h"
+#include "assets/environment_sampling.h"
 
 #include <algorithm>
 #include <bit>

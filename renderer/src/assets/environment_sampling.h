@@ -13,7 +13,7 @@
 #include <cstdint>
 #include <vector>
 
-#include "environment_maps.h"
+#include "assets/environment_maps.h"
 
 namespace brdfa {
 
@@ -56,9 +56,8 @@ struct EnvironmentDistribution {
 // non-zero density (seams included). A black environment becomes uniform over the
 // sphere (up to the |w_major|^3 variation inside each cell).
 // The default of 128 keeps the table at 768 KiB, within a CPU's L2 cache: its reads are
-// random, and on lavapipe (2-core EPYC, 1 MiB L2) a 256 table (3 MiB) ran mis at 48 % of
-// cosine's samples/s, a 128 table at 51 %, with equal or lower error at equal time in every
-// bench scene (a 0.7-degree cell still holds most of a small sun's light).
+// random, and on lavapipe a larger table ran mis at fewer samples/s with no lower error at
+// equal time in any bench scene (a 0.7-degree cell still holds most of a small sun's light).
 inline constexpr uint32_t kMaxCellsPerEdge = 128;
 EnvironmentDistribution buildEnvironmentDistribution(const EnvironmentData& env,
                                                      uint32_t maxCellsPerEdge = kMaxCellsPerEdge);

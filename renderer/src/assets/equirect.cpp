@@ -1,4 +1,4 @@
-#include "equirect.h"
+#include "assets/equirect.h"
 
 #include <algorithm>
 #include <cmath>

@@ -13,7 +13,7 @@
 #include <string>
 #include <vector>
 
-#include "environment_maps.h"
+#include "assets/environment_maps.h"
 
 namespace brdfa {
 

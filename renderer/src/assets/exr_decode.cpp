@@ -1,4 +1,4 @@
-#include "exr_decode.h"
+#include "assets/exr_decode.h"
 
 #include <Iex.h>
 #include <ImathBox.h>

@@ -7,7 +7,8 @@
 #include <string_view>
 
 #include "brdfa/result.h"
-#include "equirect.h"
+
+#include "assets/equirect.h"
 
 namespace brdfa {
 

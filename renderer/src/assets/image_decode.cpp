@@ -1,4 +1,4 @@
-#include "image_decode.h"
+#include "assets/image_decode.h"
 
 #include <stb_image.h>
 
@@ -7,10 +7,10 @@
 #include <memory>
 #include <utility>
 
-#include "cross_cubemap.h"
-#include "equirect.h"
-#include "exr_decode.h"
-#include "image_structure.h"
+#include "assets/cross_cubemap.h"
+#include "assets/equirect.h"
+#include "assets/exr_decode.h"
+#include "assets/image_structure.h"
 
 namespace brdfa {
 

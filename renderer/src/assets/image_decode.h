@@ -11,7 +11,8 @@
 #include <vector>
 
 #include "brdfa/assets.h"
-#include "environment_maps.h"
+
+#include "assets/environment_maps.h"
 
 namespace brdfa {
 

@@ -1,4 +1,4 @@
-#include "image_structure.h"
+#include "assets/image_structure.h"
 
 #include <zlib.h>
 

@@ -1,4 +1,4 @@
-#include "mesh_frames.h"
+#include "assets/mesh_frames.h"
 
 #include <glm/glm.hpp>
 

@@ -5,7 +5,7 @@
 
 #include <glm/vec3.hpp>
 
-#include "meshes.h"
+#include "assets/meshes.h"
 
 namespace brdfa {
 

@@ -1,4 +1,4 @@
-#include "meshes.h"
+#include "assets/meshes.h"
 
 #include <glm/glm.hpp>
 
@@ -6,8 +6,8 @@
 #include <cmath>
 #include <functional>
 
-#include "mesh_frames.h"
-#include "teapot_patches.h"
+#include "assets/mesh_frames.h"
+#include "assets/teapot_patches.h"
 
 namespace brdfa {
 

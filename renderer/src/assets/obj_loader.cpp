@@ -1,4 +1,4 @@
-#include "obj_loader.h"
+#include "assets/obj_loader.h"
 
 #include <tiny_obj_loader.h>
 
@@ -10,7 +10,7 @@
 #include <unordered_map>
 #include <vector>
 
-#include "mesh_frames.h"
+#include "assets/mesh_frames.h"
 
 namespace brdfa {
 

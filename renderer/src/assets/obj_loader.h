@@ -5,7 +5,8 @@
 #include <string_view>
 
 #include "brdfa/assets.h"
-#include "meshes.h"
+
+#include "assets/meshes.h"
 
 namespace brdfa {
 

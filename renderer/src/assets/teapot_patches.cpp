@@ -1,6 +1,6 @@
 // Newell's teapot as published: the control net of 32 bicubic Bezier patches (see
 // teapot_patches.h). The numbers are the classic public data set; only the layout is ours.
-#include "teapot_patches.h"
+#include "assets/teapot_patches.h"
 
 namespace brdfa::teapot {
 

@@ -1,4 +1,4 @@
-#include "memory_ledger.h"
+#include "core/memory_ledger.h"
 
 #include <algorithm>
 #include <cstdio>

@@ -98,6 +98,23 @@ class MemoryReservation {
   uint64_t bytes_ = 0;
 };
 
+// Which of the renderer's cache locks the caller of a shrink holds: the shrink takes the others
+// only if they are free, so it never waits and never deadlocks.
+struct HeldCacheLocks {
+  bool programs = false, assets = false;
+};
+// The renderer's shrink (drops unused cached programs and assets), for a caller holding `held`.
+using CacheShrinker = std::function<MemoryLedger::Shrink(HeldCacheLocks held)>;
+
+// Runs `body` under `m`: at once when the caller holds it, else only if `m` is free (a shrink
+// never waits for a lock).
+template <class Body>
+void underFreeLock(std::mutex& m, bool heldByCaller, Body&& body) {
+  if (heldByCaller) return body();
+  std::unique_lock lock(m, std::try_to_lock);
+  if (lock.owns_lock()) body();
+}
+
 // "12 MiB": how the ledger's messages write sizes.
 std::string mebibytesText(uint64_t bytes);
 

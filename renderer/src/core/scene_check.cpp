@@ -1,4 +1,4 @@
-#include "scene_check.h"
+#include "core/scene_check.h"
 
 #include <cmath>
 #include <string>

@@ -1,4 +1,4 @@
-#include "scene_math.h"
+#include "core/scene_math.h"
 
 #include <glm/gtc/matrix_transform.hpp>
 

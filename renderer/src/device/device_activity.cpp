@@ -1,4 +1,4 @@
-#include "device_activity.h"
+#include "device/device_activity.h"
 
 #include <time.h>
 

@@ -1,4 +1,4 @@
-#include "vk_context.h"
+#include "device/vk_context.h"
 
 #include <algorithm>
 #include <chrono>
@@ -6,8 +6,8 @@
 #include <optional>
 #include <vector>
 
-#include "device_activity.h"
-#include "vk_check.h"
+#include "device/device_activity.h"
+#include "device/vk_check.h"
 
 namespace brdfa {
 

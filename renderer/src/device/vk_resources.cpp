@@ -1,8 +1,8 @@
-#include "vk_resources.h"
+#include "device/vk_resources.h"
 
 #include <cstring>
 
-#include "vk_check.h"
+#include "device/vk_check.h"
 
 namespace brdfa {
 

@@ -7,7 +7,8 @@
 #include <utility>
 
 #include "brdfa/result.h"
-#include "vk_context.h"
+
+#include "device/vk_context.h"
 
 namespace brdfa {
 

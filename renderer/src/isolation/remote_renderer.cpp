@@ -1,4 +1,4 @@
-#include "remote_renderer.h"
+#include "isolation/remote_renderer.h"
 
 #include <pthread.h>
 #include <poll.h>
@@ -19,9 +19,9 @@
 #include <set>
 #include <thread>
 
-#include "compile_protocol.h"
-#include "render_wire.h"
-#include "worker_process.h"
+#include "core/worker_process.h"
+#include "isolation/render_wire.h"
+#include "programs/compile_protocol.h"
 
 namespace brdfa {
 namespace {

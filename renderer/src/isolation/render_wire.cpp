@@ -1,4 +1,4 @@
-#include "render_wire.h"
+#include "isolation/render_wire.h"
 
 #include <cstring>
 #include <functional>

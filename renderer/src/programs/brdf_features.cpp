@@ -1,4 +1,4 @@
-#include "brdf_features.h"
+#include "programs/brdf_features.h"
 
 #include <cctype>
 #include <map>

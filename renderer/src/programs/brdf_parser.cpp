@@ -17,8 +17,9 @@
 #include <vector>
 
 #include "brdfa/brdf.h"
-#include "brdf_features.h"
-#include "program_assembler.h"
+
+#include "programs/brdf_features.h"
+#include "programs/program_assembler.h"
 
 namespace brdfa {
 

@@ -1,4 +1,4 @@
-#include "compile_pool.h"
+#include "programs/compile_pool.h"
 
 #include <poll.h>
 
@@ -6,8 +6,8 @@
 #include <chrono>
 #include <cstdio>
 
-#include "compile_protocol.h"
-#include "worker_process.h"
+#include "core/worker_process.h"
+#include "programs/compile_protocol.h"
 
 namespace brdfa {
 namespace {

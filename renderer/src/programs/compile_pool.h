@@ -16,7 +16,8 @@
 #include <vector>
 
 #include "brdfa/result.h"
-#include "glsl_compiler.h"
+
+#include "programs/glsl_compiler.h"
 
 namespace brdfa {
 
@@ -29,7 +30,7 @@ class CompilePool {
  public:
   // `workerPath`: the brdfa-compile-worker executable. `maxWorkers` >= 1 run at once. They are
   // started, and warmed up with a tiny compile (glslang's first compile in a process builds its
-  // built-in symbol tables, ~200 ms), in the background, and replaced there when one is killed:
+  // built-in symbol tables), in the background, and replaced there when one is killed:
   // a user's compile never pays for a worker's start.
   CompilePool(std::string workerPath, CompileBudget budget, size_t maxWorkers);
   ~CompilePool();

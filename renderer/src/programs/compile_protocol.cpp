@@ -1,4 +1,4 @@
-#include "compile_protocol.h"
+#include "programs/compile_protocol.h"
 
 #include <limits.h>
 #include <sys/socket.h>

@@ -15,7 +15,8 @@
 #include <string_view>
 
 #include "brdfa/result.h"
-#include "glsl_compiler.h"
+
+#include "programs/glsl_compiler.h"
 
 namespace brdfa::compile_protocol {
 

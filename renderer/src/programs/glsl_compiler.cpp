@@ -1,6 +1,6 @@
 // GLSL -> SPIR-V with glslang in process, and translation of glslang's info log into
 // Diagnostics against the submitted .brdf file (see glsl_compiler.h for the line contract).
-#include "glsl_compiler.h"
+#include "programs/glsl_compiler.h"
 
 #include <glslang/Public/ResourceLimits.h>
 #include <glslang/Public/ShaderLang.h>

@@ -4,7 +4,7 @@
 // and generated code against the assembled source (source string 0). With `#version 450`
 // glslang gives the line after `#line N S` the number N (GLSL >= 3.30 semantics; checked by
 // test_glsl_compiler.cpp).
-#include "program_assembler.h"
+#include "programs/program_assembler.h"
 
 #include <algorithm>
 #include <cctype>
@@ -13,7 +13,7 @@
 #include <set>
 #include <unordered_set>
 
-#include "brdf_features.h"
+#include "programs/brdf_features.h"
 
 namespace brdfa {
 

@@ -1,4 +1,4 @@
-#include "shader_sources.h"
+#include "programs/shader_sources.h"
 
 #include <filesystem>
 #include <fstream>

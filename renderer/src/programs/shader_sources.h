@@ -6,7 +6,7 @@
 #include <vector>
 
 #include "brdfa/result.h"
-#include "program_assembler.h"
+#include "programs/program_assembler.h"
 
 namespace brdfa {
 

@@ -1,4 +1,4 @@
-#include "spirv_disk_cache.h"
+#include "programs/spirv_disk_cache.h"
 
 #include <fcntl.h>
 #include <sys/stat.h>

@@ -1,4 +1,4 @@
-#include "spirv_resources.h"
+#include "programs/spirv_resources.h"
 
 #include <map>
 #include <optional>

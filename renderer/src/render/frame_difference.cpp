@@ -4,7 +4,7 @@
 #include <algorithm>
 #include <cmath>
 
-#include "host_resolve.h"
+#include "render/host_resolve.h"
 
 namespace brdfa {
 

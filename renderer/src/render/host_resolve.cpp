@@ -1,4 +1,4 @@
-#include "host_resolve.h"
+#include "render/host_resolve.h"
 
 #include <algorithm>
 #include <array>
@@ -134,7 +134,7 @@ ErrorSums resolveOnHost(const HostResolveInput& in, uint8_t* rgba8, float* rgba3
     return sums;
   };
   // Two halves on two threads: the device is idle while a frame is read (the read happens
-  // between passes), and a stream frame waits for it (512^2: 9 ms on one core of a 2-core VM).
+  // between passes), and a stream frame waits for it.
   // Below kSplitPixels a thread's start costs more than it saves.
   constexpr size_t kSplitPixels = 1u << 16;
   if (in.pixels < kSplitPixels) return range(0, in.pixels);

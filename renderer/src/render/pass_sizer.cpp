@@ -1,4 +1,4 @@
-#include "pass_sizer.h"
+#include "render/pass_sizer.h"
 
 #include <algorithm>
 #include <cmath>

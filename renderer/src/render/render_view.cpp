@@ -1,4 +1,4 @@
-#include "render_view.h"
+#include "render/render_view.h"
 
 #include <glm/gtc/type_ptr.hpp>
 
@@ -8,10 +8,10 @@
 #include <cstring>
 #include <numeric>
 
-#include "host_resolve.h"
-#include "scene_check.h"
-#include "scene_math.h"
-#include "vk_check.h"
+#include "core/scene_check.h"
+#include "core/scene_math.h"
+#include "device/vk_check.h"
+#include "render/host_resolve.h"
 
 namespace brdfa {
 

@@ -9,12 +9,14 @@
 #include <vector>
 
 #include "brdfa/renderer.h"
-#include "gpu_assets.h"
-#include "host_resolve.h"
-#include "pass_sizer.h"
-#include "scene_math.h"
-#include "submission_sizer.h"
-#include "renderer_impl.h"
+
+#include "assets/gpu_assets.h"
+#include "core/scene_math.h"
+#include "programs/compute_kernel.h"
+#include "render/host_resolve.h"
+#include "render/pass_sizer.h"
+#include "render/submission_sizer.h"
+#include "render/renderer_impl.h"
 
 namespace brdfa {
 

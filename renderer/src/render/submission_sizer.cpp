@@ -1,4 +1,4 @@
-#include "submission_sizer.h"
+#include "render/submission_sizer.h"
 
 #include <algorithm>
 #include <cmath>

@@ -1,4 +1,4 @@
-#include "worker_process.h"
+#include "core/worker_process.h"
 
 #include <signal.h>
 #include <spawn.h>

@@ -27,8 +27,8 @@ inline constexpr bool kMemoryBudgetsApply = false;
 inline constexpr bool kMemoryBudgetsApply = true;
 #endif
 // What the shadow memory adds to a process's resident size under AddressSanitizer, where a
-// memory watch still runs (the compile pool's): an idle brdfa-compile-worker is ~105 MiB
-// there, 33 MiB without.
+// memory watch still runs (the compile pool's): it makes an idle brdfa-compile-worker several
+// times larger there.
 inline constexpr uint64_t kSanitizerResidentBytes = kMemoryBudgetsApply ? 0 : uint64_t(256) << 20;
 
 struct Child {
