@@ -30,7 +30,7 @@ int runShaderAbBench(const std::string& sourceDir, const std::vector<std::string
     std::vector<double> moveMs;
     // A BRDF edit as the stream shows it: a program new to every cache (the default mis
     // estimator) at 512x512 with a preview (RenderSettings::previewPass): setScene and the
-    // preview pass (on a CPU device, by the preview kernel: RendererImpl::previewKernel), then
+    // preview pass (on a CPU device, by the preview kernel: LocalRenderer::previewKernel), then
     // the first 1-sample pass, whose first submission carries the program's compile (JIT).
     std::unique_ptr<RenderView> editing;
     std::vector<double> editMs, editSetMs, editFirstPassMs;

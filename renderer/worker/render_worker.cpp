@@ -26,7 +26,7 @@
 #include "device/device_activity.h"
 #include "isolation/render_wire.h"
 #include "programs/compile_protocol.h"
-#include "render/renderer_impl.h"
+#include "render/local_renderer.h"
 
 namespace brdfa {
 namespace {
@@ -341,7 +341,7 @@ int main() {
   try {
     options = render_wire::optionsFromJson(start.head.at("options"));
     options.isolate = false;  // this process is the isolation
-    Result<std::shared_ptr<RendererImpl>> created = RendererImpl::create(options);
+    Result<std::shared_ptr<LocalRenderer>> created = LocalRenderer::create(options);
     if (created) {
       renderer = created.value();
       // Past what the budget leaves this process, the work in flight is stopped.

@@ -13,7 +13,7 @@ layout(local_size_x = 8, local_size_y = 8, local_size_z = 1) in;
 
 void main() {
   // target.w bit 1: a preview's once-per-restart write, one lookup per 2x2 block through the
-  // block's centre, written to the block's pixels the raster left empty (render_view.cpp,
+  // block's centre, written to the block's pixels the raster left empty (local_view.cpp,
   // recordPending); the next pass writes the full-resolution background.
   bool blocks = (brdfa_pc.target.w & 2u) != 0u;
   uvec2 p;

@@ -1,5 +1,5 @@
 // The first look at a program not yet run, on a device that compiles a pipeline at its first
-// dispatch (lavapipe's JIT: 250-350 ms for a mis program; RendererImpl::shadeKernels).
+// dispatch (lavapipe's JIT: 250-350 ms for a mis program; LocalRenderer::shadeKernels).
 // A preview (RenderSettings::previewPass) by this small program is on screen while the scene's
 // own program compiles: the estimate of
 //   L_o(V) = int f(L, V) L_env(L) max(0, N.L) dL

@@ -3,7 +3,7 @@
 
 // The dispatch covers a band of 8x8 tiles of the object's screen bounds, starting at the
 // packed origin (target.z); workgroup row y shades the band's tile row (y * step) mod rows, so
-// that the CPU device's threads each get rows from all over the band (render_view.cpp,
+// that the CPU device's threads each get rows from all over the band (local_view.cpp,
 // renderPass). Returns this invocation's pixel, `scale` pixels apart (2: a preview's blocks).
 uvec2 brdfa_dispatchPixel(uint scale) {
   uint permutation = floatBitsToUint(brdfa_pc.cameraPos.w);

@@ -1,4 +1,4 @@
-// The preview kernel (RendererImpl::shadeKernels, shaders/kernels/preview.comp.glsl): where the
+// The preview kernel (LocalRenderer::shadeKernels, shaders/kernels/preview.comp.glsl): where the
 // device compiles a pipeline at its first dispatch (lavapipe), a new program's preview comes from
 // a small kernel, one cosine sample per 2x2 block over the coarse environment
 // (environment_preview.h), while the program itself compiles in the first pass. It runs in three
@@ -110,7 +110,7 @@ TEST(PreviewKernel, ANewProgramsPreviewIsExactInTheFurnaceAndLeavesNoTrace) {
   EXPECT_GT(ones, 20000u);
 }
 
-// A preview hands over through a scratch of 16384 blocks (render_view.cpp): an image of 1022x1000
+// A preview hands over through a scratch of 16384 blocks (local_view.cpp): an image of 1022x1000
 // (511x500 blocks, rows of workgroups that end mid-group) previews in several dispatches, and two
 // objects side by side, overlapping on screen, share the 2x2 blocks along their outline. In the
 // furnace, white Lambert (Kd 1) and grey (Kd 0.3): every pixel the converged image shows as one

@@ -153,7 +153,7 @@ class RemoteRenderer : public Renderer, public std::enable_shared_from_this<Remo
  public:
   explicit RemoteRenderer(const RendererOptions& options) : options_(options) {
     options_.spareProcesses = 1;  // keepSpare(): one idle worker, counted in the live one's budget
-    // The worker derives its own limit from the budget (RendererImpl::processMemoryLimit); the
+    // The worker derives its own limit from the budget (LocalRenderer::processMemoryLimit); the
     // one kept here only backs up a worker too stuck to report itself.
     if (options_.memoryBudgetBytes > 0) supervisorMemoryLimit_ = options_.memoryBudgetBytes + (uint64_t(1) << 30);
     if (options_.workerMemoryBytes > 0) supervisorMemoryLimit_ = options_.workerMemoryBytes + (uint64_t(1) << 30);

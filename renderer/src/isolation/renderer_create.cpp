@@ -6,13 +6,13 @@
 #include "brdfa/renderer.h"
 
 #include "isolation/remote_renderer.h"
-#include "render/renderer_impl.h"
+#include "render/local_renderer.h"
 
 namespace brdfa {
 
 Result<std::shared_ptr<Renderer>> Renderer::create(const RendererOptions& options) {
   if (options.isolate) return createRemoteRenderer(options);
-  auto r = RendererImpl::create(options);
+  auto r = LocalRenderer::create(options);
   if (!r) return r.takeError();
   return std::shared_ptr<Renderer>(std::move(r.value()));
 }

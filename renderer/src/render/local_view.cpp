@@ -1,4 +1,4 @@
-#include "render/render_view.h"
+#include "render/local_view.h"
 
 #include <glm/gtc/type_ptr.hpp>
 
@@ -71,9 +71,9 @@ bool sameLighting(const Scene& a, const Scene& b) {
 
 }  // namespace
 
-RenderViewImpl::RenderViewImpl(std::shared_ptr<RendererImpl> renderer) : r_(std::move(renderer)) {}
+LocalView::LocalView(std::shared_ptr<LocalRenderer> renderer) : r_(std::move(renderer)) {}
 
-RenderViewImpl::~RenderViewImpl() {
+LocalView::~LocalView() {
   (void)r_->exchangeViewMemory(reservedBytes_, 0, "");  // giving back never fails
   VkDevice d = r_->ctx().device();
   releaseObjects(objects_);
@@ -81,7 +81,7 @@ RenderViewImpl::~RenderViewImpl() {
   if (pool_) vkDestroyDescriptorPool(d, pool_, nullptr);
 }
 
-Result<void> RenderViewImpl::init() {
+Result<void> LocalView::init() {
   VkContext& ctx = r_->ctx();
   auto cmd = CommandContext::create(ctx);
   if (!cmd) return cmd.takeError();
@@ -114,12 +114,12 @@ Result<void> RenderViewImpl::init() {
 
 // Shaders below SPIR-V 1.6 run with gl_SubgroupSize equal to the device's subgroupSize property
 // (no varying sizes), so each workgroup writes exactly this many partial sums.
-size_t RenderViewImpl::partialCount(uint32_t width, uint32_t height) const {
+size_t LocalView::partialCount(uint32_t width, uint32_t height) const {
   const uint32_t perGroup = (kResolveGroup * kResolveGroup + r_->ctx().subgroupSize() - 1) / r_->ctx().subgroupSize();
   return size_t(groups(width, kResolveGroup)) * groups(height, kResolveGroup) * perGroup;
 }
 
-Result<void> RenderViewImpl::resize(uint32_t width, uint32_t height) {
+Result<void> LocalView::resize(uint32_t width, uint32_t height) {
   VkContext& ctx = r_->ctx();
   // Everything below, counted against the renderer's budget before any of it is allocated.
   const VkDeviceSize pixels = VkDeviceSize(width) * height;
@@ -168,7 +168,7 @@ Result<void> RenderViewImpl::resize(uint32_t width, uint32_t height) {
 
 // Drops the old size's framebuffer and texel views (width_ and height_ read 0 until resize
 // completes), and creates the raster targets and framebuffer of a width x height view.
-Result<void> RenderViewImpl::createTargets(uint32_t width, uint32_t height) {
+Result<void> LocalView::createTargets(uint32_t width, uint32_t height) {
   VkContext& ctx = r_->ctx();
   VkDevice d = ctx.device();
   if (framebuffer_) vkDestroyFramebuffer(d, framebuffer_, nullptr);
@@ -211,7 +211,7 @@ Result<void> RenderViewImpl::createTargets(uint32_t width, uint32_t height) {
 
 // Creates the view's buffers for a width x height view (sizes, slices and planes as resize set
 // them, `scratchBlocks` preview scratch blocks) and their texel views.
-Result<void> RenderViewImpl::createBuffers(uint32_t width, uint32_t height, uint32_t scratchBlocks) {
+Result<void> LocalView::createBuffers(uint32_t width, uint32_t height, uint32_t scratchBlocks) {
   VkContext& ctx = r_->ctx();
   const VkDeviceSize pixels = VkDeviceSize(width) * height;
   const VkBufferUsageFlags storage = VK_BUFFER_USAGE_STORAGE_BUFFER_BIT;
@@ -256,7 +256,7 @@ Result<void> RenderViewImpl::createBuffers(uint32_t width, uint32_t height, uint
   return {};
 }
 
-void RenderViewImpl::writeViewDescriptors() {
+void LocalView::writeViewDescriptors() {
   VkDescriptorImageInfo env{r_->environmentSampler(), env_->cube.view(), VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL};
   const VkBufferView table = env_->table.view();
   const std::pair<uint32_t, const Buffer*> buffers[7] = {{0, &gbuffer_},  {3, &accum_},    {4, &counters_},
@@ -295,14 +295,14 @@ void RenderViewImpl::writeViewDescriptors() {
   }
 }
 
-void RenderViewImpl::releaseObjects(std::vector<ObjectState>& objects) {
+void LocalView::releaseObjects(std::vector<ObjectState>& objects) {
   for (ObjectState& o : objects)
     if (o.set) vkFreeDescriptorSets(r_->ctx().device(), pool_, 1, &o.set);
   objects.clear();
 }
 
-std::vector<std::optional<RendererImpl::ShadeKernels>> RenderViewImpl::prebuildKernels(const Scene& scene) {
-  std::vector<std::optional<RendererImpl::ShadeKernels>> built(scene.objects.size());
+std::vector<std::optional<LocalRenderer::ShadeKernels>> LocalView::prebuildKernels(const Scene& scene) {
+  std::vector<std::optional<LocalRenderer::ShadeKernels>> built(scene.objects.size());
   auto env = r_->environment(scene.environment.name);
   if (!env) return built;  // setScene reports it
   const bool constantEnv = (*env)->constant;
@@ -315,8 +315,8 @@ std::vector<std::optional<RendererImpl::ShadeKernels>> RenderViewImpl::prebuildK
   return built;
 }
 
-Result<std::vector<RenderViewImpl::ObjectState>> RenderViewImpl::buildObjects(
-    const Scene& scene, const std::vector<std::optional<RendererImpl::ShadeKernels>>& prebuilt) {
+Result<std::vector<LocalView::ObjectState>> LocalView::buildObjects(
+    const Scene& scene, const std::vector<std::optional<LocalRenderer::ShadeKernels>>& prebuilt) {
   VkContext& ctx = r_->ctx();
   const bool constantEnv = env_ && env_->constant;
   std::vector<ObjectState> out;
@@ -333,7 +333,7 @@ Result<std::vector<RenderViewImpl::ObjectState>> RenderViewImpl::buildObjects(
     // program's compile is long) previews by the preview kernel, whose own compile is a
     // fraction of that, and compiles in the first pass.
     auto kernels = i < prebuilt.size() && prebuilt[i]
-                       ? Result<RendererImpl::ShadeKernels>(*prebuilt[i])
+                       ? Result<LocalRenderer::ShadeKernels>(*prebuilt[i])
                        : r_->shadeKernels(*so.brdf, o.variant, constantEnv, wantsPreviewKernel(scene.render));
     if (!kernels) {
       Error e = kernels.takeError();
@@ -400,14 +400,14 @@ Result<std::vector<RenderViewImpl::ObjectState>> RenderViewImpl::buildObjects(
   return out;
 }
 
-void RenderViewImpl::interruptPass() { interruptRequested_ = true; }
+void LocalView::interruptPass() { interruptRequested_ = true; }
 
-Result<void> RenderViewImpl::setScene(const Scene& scene) {
+Result<void> LocalView::setScene(const Scene& scene) {
   BRDFA_TRY(checkScene(scene));
   // The programs are built (glslang, pipeline) before the view is taken: a pass in flight goes
   // on meanwhile, to the end of its submission (interruptPass), so a change waits for the
   // longer of the two instead of both.
-  const std::vector<std::optional<RendererImpl::ShadeKernels>> prebuilt = prebuildKernels(scene);
+  const std::vector<std::optional<LocalRenderer::ShadeKernels>> prebuilt = prebuildKernels(scene);
   std::lock_guard<std::mutex> lock(mutex_);
   interruptRequested_ = false;  // served: this call has the view now
   const uint64_t dropsBefore = r_->memoryUsage().drops;
@@ -452,7 +452,7 @@ Result<void> RenderViewImpl::setScene(const Scene& scene) {
 
 // How `scene`, with `objects` built for it, differs from the scene the view holds (any scene
 // differs in everything from none). `resized`: the new scene's size differs.
-RenderViewImpl::SceneChange RenderViewImpl::compareScene(const Scene& scene, const std::vector<ObjectState>& objects,
+LocalView::SceneChange LocalView::compareScene(const Scene& scene, const std::vector<ObjectState>& objects,
                                                          bool resized) const {
   SceneChange c;
   c.sameShading = hasScene_ && !resized && sameLighting(scene_, scene) && objects.size() == objects_.size();
@@ -481,7 +481,7 @@ RenderViewImpl::SceneChange RenderViewImpl::compareScene(const Scene& scene, con
 // Makes `scene` with its `objects` the view's: their screen bounds and coverage, what must be
 // redrawn (G-buffer slices, edge list, clears), what the submission sizer relearns, and on a
 // restart the pass state and statistics started again (sceneVersion goes on).
-void RenderViewImpl::adoptScene(const Scene& scene, std::vector<ObjectState> objects, const SceneChange& change) {
+void LocalView::adoptScene(const Scene& scene, std::vector<ObjectState> objects, const SceneChange& change) {
   const auto width = static_cast<uint32_t>(scene.render.width);
   const auto height = static_cast<uint32_t>(scene.render.height);
   const glm::mat4 viewProj = cameraFrame(scene.camera, width, height).viewProj;
@@ -529,7 +529,7 @@ void RenderViewImpl::adoptScene(const Scene& scene, std::vector<ObjectState> obj
 
 // The statistics that describe the scene rather than its passes: geometry and program sizes,
 // estimators and warnings, and a warning where optional caches were dropped since `dropsBefore`.
-void RenderViewImpl::describeScene(uint64_t dropsBefore) {
+void LocalView::describeScene(uint64_t dropsBefore) {
   stats_.vertices = stats_.triangles = stats_.programBytes = 0;
   stats_.estimator.clear();
   stats_.warnings.clear();
@@ -560,7 +560,7 @@ void RenderViewImpl::describeScene(uint64_t dropsBefore) {
   }
 }
 
-void RenderViewImpl::updateDone() {
+void LocalView::updateDone() {
   // A provisional sample is replaced by the next pass, which must run.
   stats_.maxSamplesReached = !stats_.provisional && stats_.spp >= static_cast<uint64_t>(scene_.render.maxSamples);
   // Below kMinSppForTarget the estimate rests on too few samples per half: a rare bright
@@ -569,7 +569,7 @@ void RenderViewImpl::updateDone() {
   stats_.converged = target > 0 && stats_.spp >= kMinSppForTarget && stats_.relError && *stats_.relError <= target;
 }
 
-ComputePush RenderViewImpl::basePush() const {
+ComputePush LocalView::basePush() const {
   ComputePush p{};
   CameraFrame cam = cameraFrame(scene_.camera, width_, height_);
   auto put = [](float* dst, const glm::vec3& v) { dst[0] = v.x; dst[1] = v.y; dst[2] = v.z; dst[3] = 0; };
@@ -589,7 +589,7 @@ ComputePush RenderViewImpl::basePush() const {
   return p;
 }
 
-uint32_t RenderViewImpl::sliceForPass(uint64_t pass) const {
+uint32_t LocalView::sliceForPass(uint64_t pass) const {
   // Every pass shares its samples between the half accumulators, so both halves see each slice
   // equally often (to within a sample). Even passes take slices 0, 1, 2, 3, odd ones 2, 3, 0, 1:
   // the first four passes touch all four slices, and every eight passes take each twice.
@@ -597,7 +597,7 @@ uint32_t RenderViewImpl::sliceForPass(uint64_t pass) const {
   return static_cast<uint32_t>(((pass >> 1) + (pass & 1) * (j / 2)) % j);
 }
 
-void RenderViewImpl::recordRaster(VkCommandBuffer cb, uint32_t slice) {
+void LocalView::recordRaster(VkCommandBuffer cb, uint32_t slice) {
   VkClearValue clears[3] = {};  // surface 0: background
   clears[2].depthStencil = {1.0f, 0};
   VkRenderPassBeginInfo rbi{VK_STRUCTURE_TYPE_RENDER_PASS_BEGIN_INFO};
@@ -638,7 +638,7 @@ void RenderViewImpl::recordRaster(VkCommandBuffer cb, uint32_t slice) {
   slicesReady_ |= 1u << slice;
 }
 
-void RenderViewImpl::recordBackground(VkCommandBuffer cb, const PixelRect& rect, uint32_t slice, uint32_t count,
+void LocalView::recordBackground(VkCommandBuffer cb, const PixelRect& rect, uint32_t slice, uint32_t count,
                                       bool firstPass, bool blocks) {
   if (rect.width == 0 || rect.height == 0) return;
   ComputePush push = basePush();
@@ -667,7 +667,7 @@ void RenderViewImpl::recordBackground(VkCommandBuffer cb, const PixelRect& rect,
     vkCmdDispatch(cb, groups(groups(rect.width, scale), kShadeGroup), groups(groups(rect.height, scale), kShadeGroup), 1);
 }
 
-void RenderViewImpl::recordPending(VkCommandBuffer cb, uint32_t slice, bool resuming, bool preview) {
+void LocalView::recordPending(VkCommandBuffer cb, uint32_t slice, bool resuming, bool preview) {
   // Slice 0 carries the coverage the resolve and the once-per-restart background use.
   const bool raster = (slicesReady_ & 1u) == 0 || (slicesReady_ & (1u << slice)) == 0;
   if ((slicesReady_ & 1u) == 0) recordRaster(cb, 0);
@@ -691,7 +691,7 @@ void RenderViewImpl::recordPending(VkCommandBuffer cb, uint32_t slice, bool resu
   }
 }
 
-void RenderViewImpl::recordResolve(VkCommandBuffer cb, bool linear) {
+void LocalView::recordResolve(VkCommandBuffer cb, bool linear) {
   ComputePush push = basePush();
   push.target[2] = linear ? 1u : 0u;
   vkCmdBindPipeline(cb, VK_PIPELINE_BIND_POINT_COMPUTE, r_->resolvePipeline());
@@ -700,7 +700,7 @@ void RenderViewImpl::recordResolve(VkCommandBuffer cb, bool linear) {
   vkCmdDispatch(cb, groups(width_, kResolveGroup), groups(height_, kResolveGroup), 1);
 }
 
-ErrorSums RenderViewImpl::deviceErrorSums() const {
+ErrorSums LocalView::deviceErrorSums() const {
   const auto* partials = static_cast<const float*>(partials_.mapped());
   const size_t n = partialCount(width_, height_);
   ErrorSums sums;
@@ -712,7 +712,7 @@ ErrorSums RenderViewImpl::deviceErrorSums() const {
   return sums;
 }
 
-HostResolveInput RenderViewImpl::hostResolveInput() const {
+HostResolveInput LocalView::hostResolveInput() const {
   HostResolveInput in;
   in.accum = static_cast<const float*>(accum_.mapped());
   in.surface = static_cast<const uint32_t*>(gbuffer_.mapped());  // slice 0's surface plane
@@ -722,7 +722,7 @@ HostResolveInput RenderViewImpl::hostResolveInput() const {
   return in;
 }
 
-void RenderViewImpl::setRelError(const ErrorSums& sums) {
+void LocalView::setRelError(const ErrorSums& sums) {
   double e = relativeError(sums);
   if (e >= 0)
     stats_.relError = e;
@@ -739,7 +739,7 @@ void RenderViewImpl::setRelError(const ErrorSums& sums) {
 // it (CPU devices, whose resolve runs on the host): a tile's cost is in proportion to them, not
 // to its area, since an invocation off the object returns at once and an object's bounds can
 // be half empty (a sphere's corners, a torus).
-void RenderViewImpl::measureCoverage() {
+void LocalView::measureCoverage() {
   coverageKnown_ = true;
   const auto* surface = static_cast<const uint32_t*>(gbuffer_.mapped());
   if (!surface) return;  // device-local: every invocation counts as covered
@@ -755,7 +755,7 @@ void RenderViewImpl::measureCoverage() {
   }
 }
 
-void RenderViewImpl::listEdgePixels() {
+void LocalView::listEdgePixels() {
   const auto* slices = static_cast<const uint8_t*>(gbuffer_.mapped());
   auto* list = static_cast<uint32_t*>(edgeList_.mapped());
   const uint32_t all = (1u << jitterCount_) - 1;
@@ -785,13 +785,13 @@ void RenderViewImpl::listEdgePixels() {
 // are split too: the pass sweeps the objects several times, each sweep taking the next samples
 // of the sequence (frame[2] advanced), so a pass still adds `count` samples to every pixel and
 // the result differs from the unsplit pass only in the order of float additions.
-Result<FrameStats> RenderViewImpl::renderPass(double frameTargetMs) {
+Result<FrameStats> LocalView::renderPass(double frameTargetMs) {
   std::lock_guard<std::mutex> lock(mutex_);
   if (!hasScene_) return makeError(ErrorCode::InvalidArgument, "no scene has been set");
   return passLocked(true, frameTargetMs);
 }
 
-Result<FrameStats> RenderViewImpl::passLocked(bool interruptible, double frameTargetMs) {
+Result<FrameStats> LocalView::passLocked(bool interruptible, double frameTargetMs) {
   stats_.passInProgress = false;
   updateDone();
   if (stats_.done()) {
@@ -808,7 +808,7 @@ Result<FrameStats> RenderViewImpl::passLocked(bool interruptible, double frameTa
   return finishPass(plan, sweep);
 }
 
-double RenderViewImpl::groupUnits(const ObjectState& o, size_t group, uint32_t n, bool preview) {
+double LocalView::groupUnits(const ObjectState& o, size_t group, uint32_t n, bool preview) {
   // One unit per sample of a covered pixel: an invocation off the object costs next to nothing
   // against a loop-heavy BRDF's sample, the case the split is for. One unit per workgroup
   // keeps empty tiles from being free.
@@ -816,11 +816,11 @@ double RenderViewImpl::groupUnits(const ObjectState& o, size_t group, uint32_t n
   return covered * n + 1.0;
 }
 
-uint32_t RenderViewImpl::gridX(const ObjectState& o, uint32_t scale) {
+uint32_t LocalView::gridX(const ObjectState& o, uint32_t scale) {
   return groups((o.pixels.width + scale - 1) / scale, kShadeGroup);
 }
 
-uint32_t RenderViewImpl::gridY(const ObjectState& o, uint32_t scale) {
+uint32_t LocalView::gridY(const ObjectState& o, uint32_t scale) {
   return groups((o.pixels.height + scale - 1) / scale, kShadeGroup);
 }
 
@@ -828,7 +828,7 @@ uint32_t RenderViewImpl::gridY(const ObjectState& o, uint32_t scale) {
 // own samples, slice and sweep size, or picks a new pass's kind (preview, first sample or a
 // pass of the programs), sample count, G-buffer slice and samples per sweep. Takes over
 // partial_ and clears a provisional first sample's count; lists the edge pixels between passes.
-RenderViewImpl::PassPlan RenderViewImpl::planPass(bool interruptible, double frameTargetMs) {
+LocalView::PassPlan LocalView::planPass(bool interruptible, double frameTargetMs) {
   PassPlan p;
   p.interruptible = interruptible;
   p.frameTargetMs = frameTargetMs;
@@ -893,7 +893,7 @@ RenderViewImpl::PassPlan RenderViewImpl::planPass(bool interruptible, double fra
 
 // The sweep at the pass's start: at the beginning, or where a resumed pass stood, with the
 // shade kernels' push constants for the pass's slice.
-RenderViewImpl::Sweep RenderViewImpl::startSweep(const PassPlan& plan) const {
+LocalView::Sweep LocalView::startSweep(const PassPlan& plan) const {
   Sweep s;
   s.push = basePush();
   // V is taken along the view ray through the sub-pixel position this slice was rasterized at.
@@ -911,7 +911,7 @@ RenderViewImpl::Sweep RenderViewImpl::startSweep(const PassPlan& plan) const {
   return s;
 }
 
-Result<void> RenderViewImpl::endPhase(Sweep& s, double& phaseMs) {
+Result<void> LocalView::endPhase(Sweep& s, double& phaseMs) {
   if (!s.profile) return {};
   memoryBarrier(s.cb, VK_PIPELINE_STAGE_ALL_COMMANDS_BIT, VK_ACCESS_MEMORY_WRITE_BIT,
                 VK_PIPELINE_STAGE_ALL_COMMANDS_BIT, VK_ACCESS_MEMORY_READ_BIT | VK_ACCESS_MEMORY_WRITE_BIT);
@@ -927,7 +927,7 @@ Result<void> RenderViewImpl::endPhase(Sweep& s, double& phaseMs) {
 // Runs the pass's submissions to its end, or until it is interrupted or its frame's time is
 // spent: true when complete, false when left partway (partial_ then holds where it stands and
 // stats_ its time). Each submission is sized by submissionSizer_, which learns from its time.
-Result<bool> RenderViewImpl::runSweep(const PassPlan& plan, Sweep& s) {
+Result<bool> LocalView::runSweep(const PassPlan& plan, Sweep& s) {
   do {
     // Slice 0 recorded by an earlier submission (all waited for) is on the host's side now.
     if (plan.targetMs > 0 && !coverageKnown_ && (slicesReady_ & 1u)) measureCoverage();
@@ -979,7 +979,7 @@ Result<bool> RenderViewImpl::runSweep(const PassPlan& plan, Sweep& s) {
 // Records the shading of one submission: tiles of the objects' workgroup grids, from where the
 // sweep stands, until `budget` units are taken (at least one workgroup) or the pass's samples
 // are all swept. Advances the sweep; returns the units recorded.
-Result<double> RenderViewImpl::recordShading(const PassPlan& plan, Sweep& s, double budget) {
+Result<double> LocalView::recordShading(const PassPlan& plan, Sweep& s, double budget) {
   double units = 0;
   while (s.done < plan.count) {
     const size_t i = plan.visible[s.obj];
@@ -1012,7 +1012,7 @@ Result<double> RenderViewImpl::recordShading(const PassPlan& plan, Sweep& s, dou
 // The next run of tiles of the current object from where the sweep stands, within what is
 // left of `budget` after `units`: whole rows of workgroups while they fit, else part of one
 // row (at least one workgroup per submission). No columns: the submission is full.
-RenderViewImpl::Tiles RenderViewImpl::chooseTiles(const PassPlan& plan, const Sweep& s, double units,
+LocalView::Tiles LocalView::chooseTiles(const PassPlan& plan, const Sweep& s, double units,
                                                   double budget) const {
   const size_t i = plan.visible[s.obj];
   const ObjectState& o = objects_[i];
@@ -1050,7 +1050,7 @@ RenderViewImpl::Tiles RenderViewImpl::chooseTiles(const PassPlan& plan, const Sw
 // Records the dispatches of `tiles` of the current object at `n` samples each, by its program
 // or its preview kernel. A preview kernel's stages, the first time in the pass, each end a
 // submission of their own (counted in the sweep).
-Result<void> RenderViewImpl::dispatchTiles(const PassPlan& plan, Sweep& s, const Tiles& tiles, uint32_t n) {
+Result<void> LocalView::dispatchTiles(const PassPlan& plan, Sweep& s, const Tiles& tiles, uint32_t n) {
   const size_t i = plan.visible[s.obj];
   const ObjectState& o = objects_[i];
   const VkPipelineLayout layout = r_->computeLayout();
@@ -1117,7 +1117,7 @@ Result<void> RenderViewImpl::dispatchTiles(const PassPlan& plan, Sweep& s, const
 
 // Records what follows the pass's last samples in its last submission: the edge pixels'
 // background samples, and the resolve when the error estimate is due (device resolve only).
-Result<void> RenderViewImpl::recordPassEnd(const PassPlan& plan, Sweep& s) {
+Result<void> LocalView::recordPassEnd(const PassPlan& plan, Sweep& s) {
   // Inside the objects' bounds a pixel may be background in this slice and covered in
   // another (an edge): its background samples are taken with the pass, so the pixel is the
   // average over its sub-pixel positions. With one slice nothing changes from pass to pass.
@@ -1136,7 +1136,7 @@ Result<void> RenderViewImpl::recordPassEnd(const PassPlan& plan, Sweep& s) {
 // After a submission of an unfinished pass: leaves the pass partway, keeping its place in
 // partial_ and its time in stats_, when interruptPass() asked for it (never a preview or first
 // sample) or when a watched pass's next submission would pass its frame target. True when left.
-bool RenderViewImpl::leavePartway(const PassPlan& plan, const Sweep& s, double submissionMs) {
+bool LocalView::leavePartway(const PassPlan& plan, const Sweep& s, double submissionMs) {
   // A preview or first sample is not interrupted: it is short, and under changes coming
   // faster than it (a camera dragged), interrupting it would leave nothing to show at all.
   const bool interrupted = s.done < plan.count && plan.interruptible && !plan.preview && !plan.firstSample &&
@@ -1159,7 +1159,7 @@ bool RenderViewImpl::leavePartway(const PassPlan& plan, const Sweep& s, double s
 // render time only, a first sample stands provisionally for the first pass, and a pass adds
 // its samples, its time (to the pass sizer after the interactive passes) and, when due, a new
 // error estimate. After a pass by the preview kernel the submission costs are learned again.
-FrameStats RenderViewImpl::finishPass(const PassPlan& plan, Sweep& s) {
+FrameStats LocalView::finishPass(const PassPlan& plan, Sweep& s) {
   submissionSizer_.passEnded();  // one pass to settle on the new cost
   const double segmentMs = msSince(plan.t0);  // this call's part of the pass
   const double passMs = segmentMs + (plan.resumed ? plan.resumed->ms : 0.0);
@@ -1223,12 +1223,12 @@ FrameStats RenderViewImpl::finishPass(const PassPlan& plan, Sweep& s) {
   return stats_;
 }
 
-FrameStats RenderViewImpl::stats() const {
+FrameStats LocalView::stats() const {
   std::lock_guard<std::mutex> lock(mutex_);
   return stats_;
 }
 
-Result<Frame> RenderViewImpl::readFrame(bool linear) {
+Result<Frame> LocalView::readFrame(bool linear) {
   std::lock_guard<std::mutex> lock(mutex_);
   if (!hasScene_) return makeError(ErrorCode::InvalidArgument, "no scene has been set");
   // A pass left partway (interrupted, or at a frame target) is completed first where it is the

@@ -1,4 +1,4 @@
-#include "render/renderer_impl.h"
+#include "render/local_renderer.h"
 
 #include <unistd.h>
 
@@ -13,7 +13,7 @@
 #include "assets/meshes.h"
 #include "core/worker_process.h"
 #include "device/vk_check.h"
-#include "render/render_view.h"
+#include "render/local_view.h"
 
 namespace brdfa {
 
@@ -33,13 +33,13 @@ std::vector<std::string> previewStagePieces(const std::vector<std::string>& extr
 }
 }  // namespace
 
-Result<std::shared_ptr<RendererImpl>> RendererImpl::create(const RendererOptions& options) {
-  std::shared_ptr<RendererImpl> r(new RendererImpl());
+Result<std::shared_ptr<LocalRenderer>> LocalRenderer::create(const RendererOptions& options) {
+  std::shared_ptr<LocalRenderer> r(new LocalRenderer());
   BRDFA_TRY(r->init(options));
   return r;
 }
 
-Result<void> RendererImpl::init(const RendererOptions& options) {
+Result<void> LocalRenderer::init(const RendererOptions& options) {
   auto diskCache = std::make_unique<SpirvDiskCache>(options.cacheDir, options.loadCache);
   ledger_ = std::make_unique<MemoryLedger>(options.memoryBudgetBytes, options.memoryBudgetLabel);
   const size_t workers = options.compileWorkers > 0
@@ -74,7 +74,7 @@ Result<void> RendererImpl::init(const RendererOptions& options) {
   return {};
 }
 
-Result<void> RendererImpl::createFixedKernels() {
+Result<void> LocalRenderer::createFixedKernels() {
   auto resolve = programs_->compileFixedKernel({}, {"lib/bindings.glsl", "lib/gbuffer_encoding.glsl", "lib/tonemap.glsl", "kernels/resolve.comp.glsl"},
                                     {"GL_KHR_shader_subgroup_arithmetic"});
   if (!resolve) return resolve.takeError();
@@ -103,7 +103,7 @@ Result<void> RendererImpl::createFixedKernels() {
   return {};
 }
 
-void RendererImpl::reserveFixedMemory(const RendererOptions& options, size_t workers) {
+void LocalRenderer::reserveFixedMemory(const RendererOptions& options, size_t workers) {
   // What the process holds now (driver, LLVM, fixed pipelines, and what it grows by unasked)
   // and its compile workers idle are paid before any session, once for this process and once
   // for each idle copy kept ready; what the compile workers may grow to while compiling, once.
@@ -118,7 +118,7 @@ void RendererImpl::reserveFixedMemory(const RendererOptions& options, size_t wor
   processMemoryLimit_ = options.memoryBudgetBytes ? options.memoryBudgetBytes - std::min(others, options.memoryBudgetBytes) : 0;
 }
 
-RendererImpl::~RendererImpl() {
+LocalRenderer::~LocalRenderer() {
   if (!ctx_) return;
   VkDevice d = ctx_->device();
   vkDeviceWaitIdle(d);
@@ -134,7 +134,7 @@ RendererImpl::~RendererImpl() {
   layouts_.reset();
 }
 
-Result<void> RendererImpl::createGbufferPipeline() {
+Result<void> LocalRenderer::createGbufferPipeline() {
   VkDevice d = ctx_->device();
   auto vs = programs_->spirv(ShaderStage::Vertex, programs_->sources().assembleFixed({}, {"kernels/gbuffer.vert.glsl"}), nullptr);
   if (!vs) return vs.takeError();
@@ -216,44 +216,44 @@ Result<void> RendererImpl::createGbufferPipeline() {
   return {};
 }
 
-Result<BrdfCheckReport> RendererImpl::checkBrdf(const BrdfDefinition& brdf) {
+Result<BrdfCheckReport> LocalRenderer::checkBrdf(const BrdfDefinition& brdf) {
   return analysis::checkBrdf(checkDevice(), brdf);
 }
 
-Result<SamplerCheckReport> RendererImpl::checkSampler(const BrdfDefinition& brdf) {
+Result<SamplerCheckReport> LocalRenderer::checkSampler(const BrdfDefinition& brdf) {
   return analysis::checkSampler(checkDevice(), brdf);
 }
 
-Result<EnvironmentSamplerReport> RendererImpl::checkEnvironmentSampler(const std::string& environment) {
+Result<EnvironmentSamplerReport> LocalRenderer::checkEnvironmentSampler(const std::string& environment) {
   return analysis::checkEnvironmentSampler(checkDevice(), environment);
 }
 
-Result<std::vector<Vec3>> RendererImpl::evaluateBrdf(const BrdfDefinition& brdf,
+Result<std::vector<Vec3>> LocalRenderer::evaluateBrdf(const BrdfDefinition& brdf,
                                                      const std::vector<ParamSetting>& settings,
                                                      const std::vector<DirectionPair>& pairs) {
   return analysis::evaluateBrdf(checkDevice(), brdf, settings, pairs);
 }
 
-Result<std::vector<AlbedoEstimate>> RendererImpl::estimateAlbedo(const BrdfDefinition& brdf,
+Result<std::vector<AlbedoEstimate>> LocalRenderer::estimateAlbedo(const BrdfDefinition& brdf,
                                                                  const std::vector<ParamSetting>& settings,
                                                                  const std::vector<Vec3>& views,
                                                                  uint32_t samplesPerView) {
   return analysis::estimateAlbedo(checkDevice(), brdf, settings, views, samplesPerView);
 }
 
-RendererCounters RendererImpl::counters() const {
+RendererCounters LocalRenderer::counters() const {
   RendererCounters c;
   programs_->addCounters(c);
   c.memory = ledger_->usage();
   return c;
 }
 
-Result<void> RendererImpl::exchangeViewMemory(uint64_t oldBytes, uint64_t newBytes, const std::string& what,
+Result<void> LocalRenderer::exchangeViewMemory(uint64_t oldBytes, uint64_t newBytes, const std::string& what,
                                               std::string* dropped) {
   return ledger_->exchange(MemoryUse::RenderTargets, oldBytes, newBytes, what, shrinker({}), dropped);
 }
 
-std::string RendererImpl::dropUnusedCaches(uint64_t needed, HeldCacheLocks held) {
+std::string LocalRenderer::dropUnusedCaches(uint64_t needed, HeldCacheLocks held) {
   uint64_t freed = 0;
   int programs = 0, spirv = 0;
   std::vector<std::string> assets;
@@ -271,8 +271,8 @@ std::string RendererImpl::dropUnusedCaches(uint64_t needed, HeldCacheLocks held)
   return what;
 }
 
-Result<std::unique_ptr<RenderView>> RendererImpl::createView() {
-  auto view = std::make_unique<RenderViewImpl>(shared_from_this());
+Result<std::unique_ptr<RenderView>> LocalRenderer::createView() {
+  auto view = std::make_unique<LocalView>(shared_from_this());
   BRDFA_TRY(view->init());
   return std::unique_ptr<RenderView>(std::move(view));
 }

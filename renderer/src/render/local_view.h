@@ -16,14 +16,14 @@
 #include "render/host_resolve.h"
 #include "render/pass_sizer.h"
 #include "render/submission_sizer.h"
-#include "render/renderer_impl.h"
+#include "render/local_renderer.h"
 
 namespace brdfa {
 
-class RenderViewImpl final : public RenderView {
+class LocalView final : public RenderView {
  public:
-  explicit RenderViewImpl(std::shared_ptr<RendererImpl> renderer);
-  ~RenderViewImpl() override;
+  explicit LocalView(std::shared_ptr<LocalRenderer> renderer);
+  ~LocalView() override;
 
   Result<void> init();
 
@@ -39,7 +39,7 @@ class RenderViewImpl final : public RenderView {
   struct ObjectState {
     std::shared_ptr<const ShadeKernel> kernel;
     // The preview's program while `kernel` has never run on a device that compiles at the first
-    // dispatch (RendererImpl::shadeKernels); dropped after the preview.
+    // dispatch (LocalRenderer::shadeKernels); dropped after the preview.
     std::shared_ptr<const ShadeKernel> previewKernel;
     ShadeVariant variant;  // what the kernel runs, for the stats' estimator and warnings
     std::shared_ptr<const GpuMesh> mesh;
@@ -142,10 +142,10 @@ class RenderViewImpl final : public RenderView {
   void writeViewDescriptors();
   // `prebuilt`: prebuildKernels(scene), used where it holds an object's kernels.
   Result<std::vector<ObjectState>> buildObjects(const Scene& scene,
-                                                const std::vector<std::optional<RendererImpl::ShadeKernels>>& prebuilt);
+                                                const std::vector<std::optional<LocalRenderer::ShadeKernels>>& prebuilt);
   // The kernels of `scene`'s objects, in object order, built or found in the renderer's cache
   // without the view's lock; nullopt where that failed (buildObjects asks again and reports it).
-  std::vector<std::optional<RendererImpl::ShadeKernels>> prebuildKernels(const Scene& scene);
+  std::vector<std::optional<LocalRenderer::ShadeKernels>> prebuildKernels(const Scene& scene);
 
   void releaseObjects(std::vector<ObjectState>& objects);
   // Records what a scene change left pending: the raster pass of G-buffer slice 0 and of
@@ -176,7 +176,7 @@ class RenderViewImpl final : public RenderView {
   // first passes gave it, the background averaged over its sub-pixel positions.
   void listEdgePixels();
 
-  std::shared_ptr<RendererImpl> r_;
+  std::shared_ptr<LocalRenderer> r_;
   mutable std::mutex mutex_;
   CommandContext cmd_;
   VkDescriptorPool pool_ = VK_NULL_HANDLE;

@@ -23,10 +23,10 @@ namespace brdfa {
 
 constexpr uint32_t kLeftHandedBit = 0x80000000u;  // in a surface texel's id (BRDFA_LEFT_HANDED)
 
-class RendererImpl final : public Renderer, public std::enable_shared_from_this<RendererImpl> {
+class LocalRenderer final : public Renderer, public std::enable_shared_from_this<LocalRenderer> {
  public:
-  static Result<std::shared_ptr<RendererImpl>> create(const RendererOptions& options);
-  ~RendererImpl() override;
+  static Result<std::shared_ptr<LocalRenderer>> create(const RendererOptions& options);
+  ~LocalRenderer() override;
 
   const DeviceInfo& device() const override { return ctx_->info(); }
   Result<CompileInfo> compileBrdf(const BrdfDefinition& brdf) override { return programs_->compileBrdf(brdf); }
@@ -103,7 +103,7 @@ class RendererImpl final : public Renderer, public std::enable_shared_from_this<
   bool compilesAtFirstDispatch() const { return ctx_->info().type == "cpu"; }
 
  private:
-  RendererImpl() = default;
+  LocalRenderer() = default;
   Result<void> init(const RendererOptions& options);
   Result<void> createFixedKernels();
   Result<void> createGbufferPipeline();
