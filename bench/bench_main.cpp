@@ -1,4 +1,4 @@
-// brdfa-bench: prints the figures docs/design.md section 5 asks for, as medians, in one run: the
+// brdfa-bench: prints the figures docs/design.md section 9 asks for, as medians, in one run: the
 // renderer's (library level) and the service's (through the real server over loopback HTTP).
 //   brdfa-bench [--rounds N] [--source DIR] [--only renderer|scenes|sampling|split|http|class|auth] [--scene TEXT]
 //   brdfa-bench --only shaders --against DIR[,DIR...]   (shader work: DIR/shaders against --source's, interleaved)

@@ -1,4 +1,4 @@
-// Failure behaviour (docs/design.md section 6): every bad input gets a JSON error with a fitting
+// Failure behaviour (docs/design.md section 7): every bad input gets a JSON error with a fitting
 // status and leaves the server healthy (ServerTest::TearDown checks /api/health after each).
 #include "server_fixture.h"
 

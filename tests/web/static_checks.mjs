@@ -2,7 +2,7 @@
 // `web_static` (tests/CMakeLists.txt):
 //   node tests/web/static_checks.mjs --root SOURCE_DIR    the self-test, then web/src
 //   node tests/web/static_checks.mjs --selftest           the self-test only
-// The rules (docs/design.md section 7):
+// The rules (docs/design.md sections 2 and 4.6):
 //   - only web/src/scene-commands.js calls api.patchScene (api.js defines it);
 //   - only web/src/state.js assigns into state.scene (everyone else goes through set());
 //   - only web/src/api.js touches the network (fetch, XMLHttpRequest, EventSource, WebSocket,

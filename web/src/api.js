@@ -1,4 +1,4 @@
-// The one module that talks to the network (docs/design.md section 7). Everything else calls these
+// The one module that talks to the network (docs/design.md section 2). Everything else calls these
 // functions and never builds a URL or calls fetch itself. Endpoints: docs/api.md.
 // Identities (docs/api.md, Identities and ownership): the token this browser holds lives in
 // localStorage and goes out as `Authorization: Bearer` on every request, never in a cookie or a

@@ -1,4 +1,4 @@
-// Scene edits (docs/design.md section 7): the one module that turns what a panel wants changed
+// Scene edits (docs/design.md section 4.6): the one module that turns what a panel wants changed
 // into JSON merge patches (RFC 7386) of this tab's session scene, and the only caller of
 // api.patchScene. An edit shows at once: it is applied to the local scene through set(). Per
 // session at most one PATCH is in flight; edits made meanwhile are composed into the next one,

@@ -1,4 +1,4 @@
-// One state object and its events (three.js editor style, docs/design.md section 7): panels never
+// One state object and its events (three.js editor style, docs/design.md section 2): panels never
 // call each other; they read `state`, change it with set(), and listen with on(key, fn). Every
 // key of a set() call fires that key's listeners once, after all keys are assigned.
 export const state = {

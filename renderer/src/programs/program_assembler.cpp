@@ -1,4 +1,4 @@
-// Program assembly in the fixed order of docs/design.md section 2. The only subtle part is line
+// Program assembly in the fixed order of docs/design.md section 3.1. The only subtle part is line
 // mapping: user text is emitted under `#line <file line> 1` and everything else under
 // `#line <k> 0`, so glslang reports user errors against the submitted file (source string 1)
 // and generated code against the assembled source (source string 0). With `#version 450`
@@ -215,7 +215,7 @@ struct EngineMacro {
 constexpr EngineMacro kEngineMacros[] = {{"PI", "3.14159265359"}, {"LI", "8."}};
 
 // ---------------------------------------------------------------------------------------------
-// Term includes (docs/design.md section 3). A term is trusted renderer code emitted in the
+// Term includes (docs/design.md section 3.1). A term is trusted renderer code emitted in the
 // generated region; only its include line stands in the user's text.
 
 bool isTermNameChar(char c) { return (c >= 'a' && c <= 'z') || (c >= '0' && c <= '9') || c == '_'; }

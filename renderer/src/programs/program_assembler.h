@@ -1,4 +1,4 @@
-// Assembles a shading program in the fixed order of docs/design.md section 2:
+// Assembles a shading program in the fixed order of docs/design.md section 3.1:
 //   prelude (#version, extensions, defines), generated uniforms (the BRDF's parameter block),
 //   the BRDF's inputs, the shared terms its text includes (shaders/lib/terms), the BRDF (user
 //   text under `#line`), common code (shaders/lib), the integrator (with main).

@@ -35,7 +35,7 @@ struct Quotas {
 };
 
 struct ServerConfig {
-  std::string host = "127.0.0.1";  // docs/design.md section 6: loopback unless told otherwise
+  std::string host = "127.0.0.1";  // docs/design.md section 8: loopback unless told otherwise
   int port = 8080;                 // 0 = let the kernel pick a free port
   std::string root;                // holds shaders/ and web/
   std::string dataDir = "./data";  // brdfs/ (saved user BRDFs), presets/, uploads

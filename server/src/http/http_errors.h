@@ -1,4 +1,4 @@
-// The one place where failures become HTTP responses (docs/design.md section 4): every error body is
+// The one place where failures become HTTP responses (docs/design.md section 7): every error body is
 // {"error": "<code>", "message": "...", "field": "..." (when known), "diagnostics": [...]
 // (compile errors)}.
 #pragma once

@@ -140,7 +140,7 @@ class Session {
   static constexpr std::chrono::milliseconds kFirstPassGrace{80};
   // The frame interval a streamed session aims at: while a stream client watches, each pass is
   // sized to it less the time a frame's read takes (RenderView::renderPass's frame target).
-  // Unwatched, passes keep samples_per_frame. docs/design.md section 5 asks for at least 20 frames/s;
+  // Unwatched, passes keep samples_per_frame. docs/design.md section 9 asks for at least 20 frames/s;
   // a shorter interval leaves a margin for passes that overrun their plan (the encoder thread and the
   // render worker's round trips share two cores with the device's threads). Where one sample
   // is longer than the frame (mis on a large image on a small CPU device), what keeps the still
