@@ -63,8 +63,8 @@ int runAuthBench(const std::string& serverBinary, const std::string& sourceDir, 
   tokensCli->set_keep_alive(true);
   noneCli->set_tcp_nodelay(true);  // else delayed ACKs, not the server, set the pace
   tokensCli->set_tcp_nodelay(true);
-  auto made = tokensCli->Post("/api/auth/users", {{"Authorization", "Bearer " + admin}},
-                              R"({"user": "bench-student"})", "application/json");
+  auto made = tokensCli->Post("/api/auth/users", {{"Authorization", "Bearer " + admin}}, R"({"user": "bench-student"})",
+                              "application/json");
   if (!made || made->status != 201) {
     std::fprintf(stderr, "auth bench: cannot make a student (%d)\n", made ? made->status : -1);
     return 1;
@@ -89,8 +89,8 @@ int runAuthBench(const std::string& serverBinary, const std::string& sourceDir, 
               kRequestsPerRound);
   std::printf("| mode | median per request (us) |\n|---|---|\n");
   std::printf("| none | %.1f |\n| tokens (student bearer token) | %.1f |\n", median(noneUs), median(tokensUs));
-  std::printf("\ntokens / none: median ratio %.3f; cost %.1f us per request (target: under 1000 us)\n",
-              median(ratios), median(tokensUs) - median(noneUs));
+  std::printf("\ntokens / none: median ratio %.3f; cost %.1f us per request (target: under 1000 us)\n", median(ratios),
+              median(tokensUs) - median(noneUs));
   return 0;
 }
 

@@ -109,9 +109,10 @@ bool measureService(const std::string& serverBinary, const std::string& sourceDi
   auto cli = server.client(60);
   const std::string scene = "/api/sessions/default/scene";
   const std::string frame = "/api/sessions/default/frame?min_spp=1";
-  nlohmann::json base = {{"environment", {{"name", "sky"}, {"visible", true}}},
-                         {"objects", {{{"mesh", "sphere"}, {"brdf", "ggx"}}}},
-                         {"render", {{"width", 512}, {"height", 512}, {"samples_per_frame", 4}, {"max_samples", 1048576}}}};
+  nlohmann::json base = {
+      {"environment", {{"name", "sky"}, {"visible", true}}},
+      {"objects", {{{"mesh", "sphere"}, {"brdf", "ggx"}}}},
+      {"render", {{"width", 512}, {"height", 512}, {"samples_per_frame", 4}, {"max_samples", 1048576}}}};
   if (!ok(cli->Put(scene, base.dump(), "application/json")) || !ok(cli->Get(frame))) {
     std::fprintf(stderr, "could not set up the default session\n");
     return false;
@@ -207,8 +208,8 @@ struct ClassFigures {
 
 // `sessions` sessions of the default scene, each with one stream client, for `seconds`: the
 // frames each received per second.
-bool measureClass(const std::string& serverBinary, const std::string& sourceDir, const std::vector<std::string>& extraArgs,
-                  int sessions, double seconds, ClassFigures& out) {
+bool measureClass(const std::string& serverBinary, const std::string& sourceDir,
+                  const std::vector<std::string>& extraArgs, int sessions, double seconds, ClassFigures& out) {
   testsupport::ServerProcess server;
   std::vector<std::string> args = extraArgs;
   args.insert(args.end(), {"--idle-timeout", "120"});
@@ -217,9 +218,10 @@ bool measureClass(const std::string& serverBinary, const std::string& sourceDir,
     return false;
   }
   auto cli = server.client(60);
-  nlohmann::json scene = {{"environment", {{"name", "sky"}, {"visible", true}}},
-                          {"objects", {{{"mesh", "sphere"}, {"brdf", "ggx"}}}},
-                          {"render", {{"width", 512}, {"height", 512}, {"samples_per_frame", 4}, {"max_samples", 1048576}}}};
+  nlohmann::json scene = {
+      {"environment", {{"name", "sky"}, {"visible", true}}},
+      {"objects", {{{"mesh", "sphere"}, {"brdf", "ggx"}}}},
+      {"render", {{"width", 512}, {"height", 512}, {"samples_per_frame", 4}, {"max_samples", 1048576}}}};
   std::vector<std::string> ids;
   for (int i = 0; i < sessions; ++i) {
     auto r = cli->Post("/api/sessions", scene.dump(), "application/json");
@@ -322,8 +324,8 @@ int runHttpBench(const std::string& serverBinary, const std::string& sourceDir) 
       for (const ServiceFigures& f : runs) v.push_back(f.*field);
       return median(v);
     };
-    return ServiceFigures{of(&ServiceFigures::editMs),      of(&ServiceFigures::sliderMs),
-                          of(&ServiceFigures::fps),         of(&ServiceFigures::editFullMs),
+    return ServiceFigures{of(&ServiceFigures::editMs),       of(&ServiceFigures::sliderMs),
+                          of(&ServiceFigures::fps),          of(&ServiceFigures::editFullMs),
                           of(&ServiceFigures::sliderFullMs), of(&ServiceFigures::orbitFps),
                           of(&ServiceFigures::scriptEditMs), of(&ServiceFigures::scriptSliderMs)};
   };
@@ -384,7 +386,9 @@ int runClassBench(const std::string& serverBinary, const std::string& sourceDir)
       hi.push_back(f.maxFps);
       rss.push_back(f.serverRssMiB);
     }
-    runs.emplace_back(mode == 0 ? "render worker" : mode == 1 ? "--in-process" : "baseline build",
+    runs.emplace_back(mode == 0   ? "render worker"
+                      : mode == 1 ? "--in-process"
+                                  : "baseline build",
                       ClassFigures{median(lo), median(mid), median(hi), median(rss)});
   }
 

@@ -22,13 +22,21 @@ int main(int argc, char** argv) {
   std::string only, sceneFilter, against;
   for (int i = 1; i < argc; ++i) {
     std::string a = argv[i];
-    if (a == "--rounds" && i + 1 < argc) rounds = std::atoi(argv[++i]);
-    else if (a == "--source" && i + 1 < argc) source = argv[++i];
-    else if (a == "--only" && i + 1 < argc) only = argv[++i];
-    else if (a == "--scene" && i + 1 < argc) sceneFilter = argv[++i];  // sampling scenes whose label holds TEXT
-    else if (a == "--against" && i + 1 < argc) against = argv[++i];
+    if (a == "--rounds" && i + 1 < argc)
+      rounds = std::atoi(argv[++i]);
+    else if (a == "--source" && i + 1 < argc)
+      source = argv[++i];
+    else if (a == "--only" && i + 1 < argc)
+      only = argv[++i];
+    else if (a == "--scene" && i + 1 < argc)
+      sceneFilter = argv[++i];  // sampling scenes whose label holds TEXT
+    else if (a == "--against" && i + 1 < argc)
+      against = argv[++i];
     else {
-      std::fprintf(stderr, "usage: brdfa-bench [--rounds N] [--source DIR] [--only renderer|scenes|sampling|split|http|class|auth] [--scene TEXT] [--only shaders --against DIR[,DIR...]]\n");
+      std::fprintf(
+          stderr,
+          "usage: brdfa-bench [--rounds N] [--source DIR] [--only renderer|scenes|sampling|split|http|class|auth] "
+          "[--scene TEXT] [--only shaders --against DIR[,DIR...]]\n");
       return 2;
     }
   }
@@ -45,7 +53,8 @@ int main(int argc, char** argv) {
   int code = 0;
   if (wanted("renderer") && (code = brdfa::bench::runRendererBench(source, rounds)) != 0) return code;
   if (wanted("scenes") && (code = brdfa::bench::runSceneBench(source, rounds)) != 0) return code;
-  if (wanted("sampling") && (code = brdfa::bench::runSamplingBench(source, std::max(1, rounds / 5), sceneFilter)) != 0) return code;
+  if (wanted("sampling") && (code = brdfa::bench::runSamplingBench(source, std::max(1, rounds / 5), sceneFilter)) != 0)
+    return code;
   if (wanted("split") && (code = brdfa::bench::runSplitBench(source, rounds)) != 0) return code;
   if (wanted("http") && (code = brdfa::bench::runHttpBench(BRDFA_SERVER_BINARY, source)) != 0) return code;
   if (only == "class" && (code = brdfa::bench::runClassBench(BRDFA_SERVER_BINARY, source)) != 0) return code;

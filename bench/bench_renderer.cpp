@@ -135,8 +135,8 @@ int runRendererBench(const std::string& sourceDir, int rounds) {
   }
   const double samples = double(spherePixels(kSize, kSize)) * kSpp;
   auto mps = [&](double ms) { return samples / (ms * 1e3); };
-  header("Shading throughput: GGX sphere, sky cubemap, 512x512, 16 samples/pass, median of " +
-         std::to_string(rounds) + " interleaved passes");
+  header("Shading throughput: GGX sphere, sky cubemap, 512x512, 16 samples/pass, median of " + std::to_string(rounds) +
+         " interleaved passes");
   row("minimal reference kernel (bench/minimal_kernel.glsl)", mps(median(refMs)), "M samples/s",
       std::to_string(median(refMs)).substr(0, 6) + " ms/pass");
   row("renderer, background hidden", mps(median(hiddenMs)), "M samples/s",

@@ -20,9 +20,9 @@ namespace brdfa::bench {
 
 namespace {
 
-constexpr int kSize = 64;           // the sphere covers about 2400 pixels
-constexpr int kSamplesPerPass = 64; // passes long enough that fixed per-pass costs do not dominate
-constexpr double kBudgetMs = 1000;  // render time per strategy and round
+constexpr int kSize = 64;            // the sphere covers about 2400 pixels
+constexpr int kSamplesPerPass = 64;  // passes long enough that fixed per-pass costs do not dominate
+constexpr double kBudgetMs = 1000;   // render time per strategy and round
 constexpr double kReferenceMs = 6000;
 
 struct BenchScene {
@@ -82,10 +82,9 @@ int runSamplingBench(const std::string& sourceDir, int rounds, const std::string
       {"ward 0.05, studio", "ward", "studio", {{"alpha_x", {0.05f, 0.05f, 0.05f}}, {"alpha_y", {0.05f, 0.05f, 0.05f}}}},
   };
   const std::string world = "/usr/share/blender/datafiles/studiolights/world/courtyard.exr";
-  if (std::filesystem::exists(world) &&
-      (*renderer)->registerAsset("blender_courtyard", AssetKind::Environment, world))
-    scenes.insert(scenes.begin() + 3, {"GGX 0.2, blender_courtyard", "ggx", "blender_courtyard",
-                                       {{"roughness", {0.2f, 0.2f, 0.2f}}}});
+  if (std::filesystem::exists(world) && (*renderer)->registerAsset("blender_courtyard", AssetKind::Environment, world))
+    scenes.insert(scenes.begin() + 3,
+                  {"GGX 0.2, blender_courtyard", "ggx", "blender_courtyard", {{"roughness", {0.2f, 0.2f, 0.2f}}}});
   else
     std::printf("(blender-data is not installed: the blender world row is left out)\n");
   if (!sceneFilter.empty())
@@ -94,9 +93,10 @@ int runSamplingBench(const std::string& sourceDir, int rounds, const std::string
                  scenes.end());
   const SamplingMode modes[] = {SamplingMode::Cosine, SamplingMode::Brdf, SamplingMode::Environment, SamplingMode::Mis};
 
-  std::printf("\nSampling strategies at equal time (%dx%d sphere, %.0f ms of render time each, interleaved; "
-              "relMSE against two independent mis references of %.0f ms each; median of %d rounds)\n",
-              kSize, kSize, kBudgetMs, kReferenceMs / 2, rounds);
+  std::printf(
+      "\nSampling strategies at equal time (%dx%d sphere, %.0f ms of render time each, interleaved; "
+      "relMSE against two independent mis references of %.0f ms each; median of %d rounds)\n",
+      kSize, kSize, kBudgetMs, kReferenceMs / 2, rounds);
   std::printf("| %-28s | %-11s | %-24s | %8s | %10s | %12s | %s\n", "scene", "strategy", "estimator", "spp",
               "M samples/s", "relMSE", "relMSE cosine / this");
   bool allWithin2x = true, allFastEnough = true;
@@ -158,9 +158,9 @@ int runSamplingBench(const std::string& sourceDir, int rounds, const std::string
     double best = 0;
     for (SamplingMode m : modes) best = std::max(best, median(ratio[m]));
     for (SamplingMode m : modes) {
-      std::printf("| %-28s | %-11s | %-24s | %8.0f | %10.2f | %12.3e | %10.2f\n", b.label.c_str(),
-                  samplingModeName(m), estimator[m].c_str(), median(spp[m]), median(rate[m]) * pixels / 1e3,
-                  median(mse[m]), median(ratio[m]));
+      std::printf("| %-28s | %-11s | %-24s | %8.0f | %10.2f | %12.3e | %10.2f\n", b.label.c_str(), samplingModeName(m),
+                  estimator[m].c_str(), median(spp[m]), median(rate[m]) * pixels / 1e3, median(mse[m]),
+                  median(ratio[m]));
     }
     const double mis = median(ratio[SamplingMode::Mis]);
     std::printf("|   mis against the best single strategy: %.2fx worse (target <= 2)\n", best / mis);

@@ -122,7 +122,7 @@ int runShaderAbBench(const std::string& sourceDir, const std::vector<std::string
     }
   }
   for (auto [what, series] : {std::pair{"setScene", &Tree::editSetMs}, std::pair{"+ preview pass", &Tree::editMs},
-                               std::pair{"+ first 1-sample pass", &Tree::editFirstPassMs}}) {
+                              std::pair{"+ first 1-sample pass", &Tree::editFirstPassMs}}) {
     const double e = median(trees[0].*series);
     row(std::string("A, new BRDF program (mis): ") + what, e, "ms");
     for (size_t i = 1; i < trees.size(); ++i)

@@ -49,7 +49,8 @@ std::vector<pid_t> numberedEntries(const std::string& dir) {
 // `root` and every process below it.
 std::set<pid_t> processTree(pid_t root) {
   std::map<pid_t, pid_t> parent;
-  for (pid_t p : numberedEntries("/proc")) parent[p] = pid_t(statField(statFields("/proc/" + std::to_string(p) + "/stat"), 4));
+  for (pid_t p : numberedEntries("/proc"))
+    parent[p] = pid_t(statField(statFields("/proc/" + std::to_string(p) + "/stat"), 4));
   std::set<pid_t> tree{root};
   for (bool grew = true; grew;) {
     grew = false;
@@ -122,7 +123,8 @@ ClassSnapshot takeClassSnapshot(pid_t serverPid, int port) {
     const double processSeconds = (statField(whole, 14) + statField(whole, 15)) / hz;
     const std::string kind = p == self ? "bench" : process.rfind("brdfa-render-wo", 0) == 0 ? "worker" : "server";
     s.cpuSeconds[kind + ": threads that ended"] += std::max(0.0, processSeconds - threadsSeconds);
-    if (p != self) s.cpuSeconds["children that ended (compile workers)"] += (statField(whole, 16) + statField(whole, 17)) / hz;
+    if (p != self)
+      s.cpuSeconds["children that ended (compile workers)"] += (statField(whole, 16) + statField(whole, 17)) / hz;
   }
   std::istringstream cpu(firstLine(readText("/proc/stat")));
   std::string label;
@@ -148,7 +150,8 @@ ClassSnapshot takeClassSnapshot(pid_t serverPid, int port) {
 void printClassBreakdown(const ClassSnapshot& before, const ClassSnapshot& after, double frames, double wallSeconds,
                          const std::string& title) {
   if (frames <= 0 || wallSeconds <= 0) return;
-  auto delta = [](const std::map<std::string, double>& a, const std::map<std::string, double>& b, const std::string& k) {
+  auto delta = [](const std::map<std::string, double>& a, const std::map<std::string, double>& b,
+                  const std::string& k) {
     auto x = b.find(k);
     auto y = a.find(k);
     return (x == b.end() ? 0.0 : x->second) - (y == a.end() ? 0.0 : y->second);
@@ -169,7 +172,9 @@ void printClassBreakdown(const ClassSnapshot& before, const ClassSnapshot& after
     ours += d;
   }
   std::sort(parts.rbegin(), parts.rend());
-  auto share = [&](double seconds) { return std::to_string(100.0 * seconds / machine).substr(0, 4) + " % of the CPUs"; };
+  auto share = [&](double seconds) {
+    return std::to_string(100.0 * seconds / machine).substr(0, 4) + " % of the CPUs";
+  };
   for (const auto& [seconds, part] : parts) row(part, seconds * perFrame, "core-ms", share(seconds));
   row("idle (the whole machine)", idle * perFrame, "core-ms", share(idle));
   row("the rest: other processes, the kernel's own", (machine - idle - ours) * perFrame, "core-ms",
@@ -177,18 +182,22 @@ void printClassBreakdown(const ClassSnapshot& before, const ClassSnapshot& after
   // Frames are not the work: a frame of a longer pass carries more samples.
   const double samples = delta(before.metrics, after.metrics, "brdfa_samples_rendered_total");
   row("pixel samples rendered per frame delivered", samples / frames / 1e6, "million");
-  if (samples > 0) row("CPU time of the server and workers per million samples", 1e9 * (ours - selfSeconds) / samples, "core-ms");
+  if (samples > 0)
+    row("CPU time of the server and workers per million samples", 1e9 * (ours - selfSeconds) / samples, "core-ms");
   row("parts measured here (threads + idle) / all CPU time", (ours + idle) / machine, "ratio",
       "within 0.9-1.1: the parts add up");
-  row("all CPU time (/proc/stat) / (cores x wall time)", machine / (double(::sysconf(_SC_NPROCESSORS_ONLN)) * wallSeconds),
-      "ratio", std::to_string(::sysconf(_SC_NPROCESSORS_ONLN)) + " cores");
+  row("all CPU time (/proc/stat) / (cores x wall time)",
+      machine / (double(::sysconf(_SC_NPROCESSORS_ONLN)) * wallSeconds), "ratio",
+      std::to_string(::sysconf(_SC_NPROCESSORS_ONLN)) + " cores");
 
   for (const char* kind : {"server", "worker", "bench"})
     row(std::string("context switches of the ") + kind + " (voluntary + involuntary)",
         (delta(before.switches, after.switches, std::string(kind) + " voluntary") +
-         delta(before.switches, after.switches, std::string(kind) + " involuntary")) / frames,
+         delta(before.switches, after.switches, std::string(kind) + " involuntary")) /
+            frames,
         "per frame",
-        std::to_string(delta(before.switches, after.switches, std::string(kind) + " involuntary") / frames).substr(0, 5) +
+        std::to_string(delta(before.switches, after.switches, std::string(kind) + " involuntary") / frames)
+                .substr(0, 5) +
             " involuntary");
 
   const bool worker = after.metrics.count("brdfa_worker_in_flight_max");

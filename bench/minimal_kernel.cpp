@@ -125,12 +125,19 @@ Result<std::unique_ptr<MinimalKernel>> MinimalKernel::create(const std::string& 
   VkShaderModule module;
   BRDFA_VK_TRY(vkCreateShaderModule(d, &mci, nullptr, &module));
   VkComputePipelineCreateInfo cpi{VK_STRUCTURE_TYPE_COMPUTE_PIPELINE_CREATE_INFO};
-  cpi.stage = {VK_STRUCTURE_TYPE_PIPELINE_SHADER_STAGE_CREATE_INFO, nullptr, 0, VK_SHADER_STAGE_COMPUTE_BIT, module, "main", nullptr};
+  cpi.stage = {VK_STRUCTURE_TYPE_PIPELINE_SHADER_STAGE_CREATE_INFO,
+               nullptr,
+               0,
+               VK_SHADER_STAGE_COMPUTE_BIT,
+               module,
+               "main",
+               nullptr};
   cpi.layout = st->layout;
   VkResult r = vkCreateComputePipelines(d, VK_NULL_HANDLE, 1, &cpi, nullptr, &st->pipeline);
   vkDestroyShaderModule(d, module, nullptr);
   if (r != VK_SUCCESS) return vkError(r, "vkCreateComputePipelines");
-  VkDescriptorPoolSize sizes[2] = {{VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 1}, {VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, 1}};
+  VkDescriptorPoolSize sizes[2] = {{VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 1},
+                                   {VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, 1}};
   VkDescriptorPoolCreateInfo pci{VK_STRUCTURE_TYPE_DESCRIPTOR_POOL_CREATE_INFO};
   pci.maxSets = 1;
   pci.poolSizeCount = 2;
@@ -144,8 +151,10 @@ Result<std::unique_ptr<MinimalKernel>> MinimalKernel::create(const std::string& 
   VkDescriptorBufferInfo bi{st->accum.handle(), 0, VK_WHOLE_SIZE};
   VkDescriptorImageInfo ii{st->sampler, st->cube.view(), VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL};
   VkWriteDescriptorSet w[2] = {};
-  w[0] = {VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET, nullptr, st->set, 0, 0, 1, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, nullptr, &bi, nullptr};
-  w[1] = {VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET, nullptr, st->set, 1, 0, 1, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, &ii, nullptr, nullptr};
+  w[0] = {VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET, nullptr, st->set, 0,      0, 1,
+          VK_DESCRIPTOR_TYPE_STORAGE_BUFFER,      nullptr, &bi,     nullptr};
+  w[1] = {VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET,    nullptr, st->set, 1,      0, 1,
+          VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, &ii,     nullptr, nullptr};
   vkUpdateDescriptorSets(d, 2, w, 0, nullptr);
   auto cmd = CommandContext::create(c);
   if (!cmd) return cmd.takeError();

@@ -12,7 +12,6 @@
 #include "programs/compile_protocol.h"
 #include "programs/glsl_compiler.h"
 
-
 int main(int argc, char** argv) {
   unsigned long long memoryMiB = 0;
   for (int i = 1; i + 1 < argc; ++i)

@@ -164,13 +164,13 @@ class Worker {
         const bool build = work->kind == device_activity::Kind::PipelineBuild;
         const double budget = isCheck(work->tag) ? o.checkSeconds : build ? o.buildSeconds : o.passSeconds;
         const double wall = std::chrono::duration<double>(now - work->start).count();
-        const bool overrun = !cpuDevice ? wall > budget
-                                        : (wall > budget && device_activity::processCpuSeconds() - work->cpuStart > budget) ||
-                                              wall > kStuckFactor * budget;
+        const bool overrun = !cpuDevice
+                                 ? wall > budget
+                                 : (wall > budget && device_activity::processCpuSeconds() - work->cpuStart > budget) ||
+                                       wall > kStuckFactor * budget;
         if (overrun) event = json{{"id", work->tag}, {"kind", build ? "build" : "pass"}, {"resource", "time"}};
       }
-      if (event.is_null() && o.workerMemoryBytes > 0 &&
-          worker_process::residentBytes(getpid()) > o.workerMemoryBytes) {
+      if (event.is_null() && o.workerMemoryBytes > 0 && worker_process::residentBytes(getpid()) > o.workerMemoryBytes) {
         // Memory grows in the driver's compiles; else blame the oldest work.
         auto work = device_activity::oldest(device_activity::Kind::PipelineBuild);
         if (!work) work = device_activity::oldest();
@@ -227,11 +227,13 @@ class Worker {
     } else if (op == "checkSampler") {
       reply(id, map(r.checkSampler(wire::brdfFromJson(head.at("brdf"))), [](auto& v) { return wire::toJson(v); }));
     } else if (op == "analysisValues") {
-      reply(id, map(r.evaluateBrdf(wire::brdfFromJson(head.at("brdf")), head.at("settings").get<std::vector<ParamSetting>>(),
+      reply(id, map(r.evaluateBrdf(wire::brdfFromJson(head.at("brdf")),
+                                   head.at("settings").get<std::vector<ParamSetting>>(),
                                    wire::pairsFromJson(head.at("pairs"))),
                     [](auto& v) { return json(v); }));
     } else if (op == "analysisAlbedo") {
-      reply(id, map(r.estimateAlbedo(wire::brdfFromJson(head.at("brdf")), head.at("settings").get<std::vector<ParamSetting>>(),
+      reply(id, map(r.estimateAlbedo(wire::brdfFromJson(head.at("brdf")),
+                                     head.at("settings").get<std::vector<ParamSetting>>(),
                                      head.at("views").get<std::vector<Vec3>>(), head.at("samples").get<uint32_t>()),
                     [](auto& v) { return wire::toJson(v); }));
     } else if (op == "checkEnvironmentSampler") {
@@ -242,7 +244,8 @@ class Worker {
     } else if (op == "counters") {
       reply(id, wire::toJson(r.counters()));
     } else if (op == "names") {
-      reply(id, json{{"environments", r.environmentNames()}, {"meshes", r.meshNames()}, {"textures", r.textureNames()}});
+      reply(id,
+            json{{"environments", r.environmentNames()}, {"meshes", r.meshNames()}, {"textures", r.textureNames()}});
     } else if (op == "registerAsset") {
       Result<void> done = r.registerAsset(head.at("name").get<std::string>(), head.at("kind").get<AssetKind>(),
                                           head.at("path").get<std::string>());
@@ -289,7 +292,11 @@ class Worker {
       if (!frame) return reply(id, frame.takeError());
       Frame& f = frame.value();
       // Pixels travel in the binary tail: 8-bit first, then the float ones when asked.
-      reply(id, json{{"width", f.width}, {"height", f.height}, {"linear", !f.rgba32f.empty()}, {"stats", wire::toJson(f.stats)}},
+      reply(id,
+            json{{"width", f.width},
+                 {"height", f.height},
+                 {"linear", !f.rgba32f.empty()},
+                 {"stats", wire::toJson(f.stats)}},
             {std::string_view(reinterpret_cast<const char*>(f.rgba8.data()), f.rgba8.size()),
              std::string_view(reinterpret_cast<const char*>(f.rgba32f.data()), f.rgba32f.size() * sizeof(float))});
     } else {
@@ -355,7 +362,8 @@ int main() {
     }
   } catch (const std::exception& e) {
     hello.head["ok"] = false;
-    hello.head["error"] = render_wire::toJson(makeError(ErrorCode::Internal, std::string("render worker: ") + e.what()));
+    hello.head["error"] =
+        render_wire::toJson(makeError(ErrorCode::Internal, std::string("render worker: ") + e.what()));
   }
   if (!compile_protocol::writeFrame(channel, render_wire::encode(hello)) || !renderer) return 1;
   Worker(channel, renderer).serve(options);

@@ -80,7 +80,7 @@ bool decodeImage(const std::string& pfmBody, Image& out);
 std::vector<std::pair<int, int>> interiorPixels(const Image& img);
 
 // Sources used by several tests.
-extern const char* const kLambertWhite;  // color Kd 1 1 1, f = Kd / pi (own PI constant)
+extern const char* const kLambertWhite;     // color Kd 1 1 1, f = Kd / pi (own PI constant)
 extern const char* const kTexturedLambert;  // f = Kd * texture(iTexture0, texCoord).rgb / pi
 extern const char* const kSyntaxErrorOnLine9;
 extern const char* const kNanOnHalfHemisphere;

@@ -39,8 +39,9 @@ TEST_F(Analysis, LambertPolarLobeIsFlatAtOneOverPi) {
     for (size_t i = 1; i + 1 < values.size(); ++i)
       for (int c = 0; c < 3; ++c) EXPECT_NEAR(values[i][c].get<double>(), 1.0 / kPi, 1e-6) << plane << " " << i;
   }
-  json cosine = plot("polar", {{"series", {{{"brdf", "lambert"}, {"params", {{"Kd", {1, 1, 1}}}}}}},
-                               {"theta_i", 30}, {"quantity", "f_cos"}});
+  json cosine = plot(
+      "polar",
+      {{"series", {{{"brdf", "lambert"}, {"params", {{"Kd", {1, 1, 1}}}}}}}, {"theta_i", 30}, {"quantity", "f_cos"}});
   const json& theta = cosine["axes"]["theta_deg"];
   for (size_t i = 1; i + 1 < theta.size(); ++i)
     EXPECT_NEAR(lum(cosine["series"][0]["values"]["incidence"][i]), std::cos(theta[i].get<double>() * kPi / 180) / kPi,
@@ -54,7 +55,8 @@ TEST_F(Analysis, LambertPolarLobeIsFlatAtOneOverPi) {
 TEST_F(Analysis, GgxPolarPeaksAtTheMirrorAndThePerpendicularPlaneIsSymmetric) {
   for (double roughness : {0.02, 0.05, 0.1, 0.5}) {
     json out = plot("polar", {{"series", {{{"brdf", "ggx"}, {"params", {{"roughness", roughness}}}}}},
-                              {"theta_i", 30}, {"resolution", 361}});
+                              {"theta_i", 30},
+                              {"resolution", 361}});
     const json& theta = out["axes"]["theta_deg"];
     ASSERT_EQ(theta[240], 30.0);
     const json& in = out["series"][0]["values"]["incidence"];
@@ -88,8 +90,9 @@ TEST_F(Analysis, GgxPolarPeaksAtTheMirrorAndThePerpendicularPlaneIsSymmetric) {
 TEST_F(Analysis, GgxAlbedoMatchesAnIndependentQuadratureDownToRoughness0001) {
   const std::vector<double> views = {0, 45, 80, 89};
   for (double roughness : {0.001, 0.01, 0.3, 1.0}) {
-    json out = plot("albedo", {{"series", {{{"brdf", "ggx"}, {"params", {{"roughness", roughness}, {"F0", {1, 1, 1}}}}}}},
-                               {"theta_v", views}});
+    json out =
+        plot("albedo", {{"series", {{{"brdf", "ggx"}, {"params", {{"roughness", roughness}, {"F0", {1, 1, 1}}}}}}},
+                        {"theta_v", views}});
     const json& s = out["series"][0];
     EXPECT_EQ(s["estimator"], "brdf sampler");
     ASSERT_EQ(s["values"].size(), views.size());
@@ -124,7 +127,9 @@ TEST_F(Analysis, LambertAlbedoIsOneWithinItsErrorBar) {
 // The 3D lobe of lambert's f cos is cos(theta) / pi at every azimuth.
 TEST_F(Analysis, LambertLobeIsTheCosine) {
   json out = plot("lobe", {{"series", {{{"brdf", "lambert"}, {"params", {{"Kd", {1, 1, 1}}}}}}},
-                           {"theta_i", 45}, {"quantity", "f_cos"}, {"resolution", 10}});
+                           {"theta_i", 45},
+                           {"quantity", "f_cos"},
+                           {"resolution", 10}});
   const json& theta = out["axes"]["theta_deg"];
   const json& phi = out["axes"]["phi_deg"];
   ASSERT_EQ(theta.size(), 10u);
@@ -141,7 +146,8 @@ TEST_F(Analysis, LambertLobeIsTheCosine) {
 // specular peak is the theta_h = 0 column.
 TEST_F(Analysis, SliceHasValuesExactlyAboveTheHorizon) {
   json out = plot("slice", {{"series", {{{"brdf", "lambert"}, {"params", {{"Kd", {1, 1, 1}}}}}, {{"brdf", "ggx"}}}},
-                            {"resolution", 19}, {"phi_d", 90}});
+                            {"resolution", 19},
+                            {"phi_d", 90}});
   const json& th = out["axes"]["theta_h_deg"];
   const json& td = out["axes"]["theta_d_deg"];
   ASSERT_EQ(out["series"].size(), 2u);
@@ -182,8 +188,9 @@ TEST_F(Analysis, OverlaysSeveralBrdfsAndWritesCsv) {
   // Equal peaks, 1 / (pi m^2) at the mirror direction (+20 degrees), different tails.
   EXPECT_NEAR(lum(out["series"][0]["values"]["incidence"][110]), 1.0 / (kPi * 0.09), 1e-4);
   EXPECT_NEAR(lum(out["series"][1]["values"]["incidence"][110]), 1.0 / (kPi * 0.09), 1e-4);
-  EXPECT_GT(std::fabs(lum(out["series"][0]["values"]["incidence"][150]) - lum(out["series"][1]["values"]["incidence"][150])),
-            0.01);
+  EXPECT_GT(
+      std::fabs(lum(out["series"][0]["values"]["incidence"][150]) - lum(out["series"][1]["values"]["incidence"][150])),
+      0.01);
 
   json clamped = plot("polar", {{"series", {{{"brdf", "ggx"}, {"params", {{"roughness", 0}}}}}}});
   EXPECT_EQ(clamped["series"][0]["params"]["roughness"], 0.001);
@@ -218,8 +225,9 @@ TEST_F(Analysis, BadRequestsAreRefusedWithTheirField) {
   expect("pie", {{"series", lambert}}, 404, "");
   expect("polar", json::object(), 400, "series");
   expect("polar", {{"series", json::array()}}, 400, "series");
-  expect("polar", {{"series", json::array({lambert[0], lambert[0], lambert[0], lambert[0], lambert[0], lambert[0],
-                                           lambert[0], lambert[0], lambert[0]})}},
+  expect("polar",
+         {{"series", json::array({lambert[0], lambert[0], lambert[0], lambert[0], lambert[0], lambert[0], lambert[0],
+                                  lambert[0], lambert[0]})}},
          400, "series");
   expect("polar", {{"series", {{{"brdf", "nope"}}}}}, 404, "series[0].brdf");
   expect("polar", {{"series", {{{"brdf", "ggx"}, {"params", {{"shininess", 2}}}}}}}, 400, "series[0].params.shininess");
@@ -231,10 +239,11 @@ TEST_F(Analysis, BadRequestsAreRefusedWithTheirField) {
   expect("albedo", {{"series", lambert}, {"samples", 10}}, 400, "samples");
   expect("polar", {{"series", lambert}, {"colour", 1}}, 400, "colour");
   // A file that does not compile: 422 with the diagnostic's line.
-  auto r = post("/api/analysis/polar",
-                json{{"series", {{{"source", "::begin shader\nvec3 BRDF(vec3 L, vec3 V, vec3 N, vec3 X, vec3 Y) {\n"
-                                             "  return nope;\n}\n::end shader\n"}}}}}
-                    .dump());
+  auto r = post("/api/analysis/polar", json{{"series",
+                                             {{{"source",
+                                                "::begin shader\nvec3 BRDF(vec3 L, vec3 V, vec3 N, vec3 X, vec3 Y) {\n"
+                                                "  return nope;\n}\n::end shader\n"}}}}}
+                                           .dump());
   ASSERT_TRUE(r);
   EXPECT_EQ(r->status, 422) << r->body;
   EXPECT_EQ(bodyJson(r)["diagnostics"][0]["line"], 3) << r->body;

@@ -67,10 +67,10 @@ std::string exr(int w, int h, std::array<float, 3> rgb) {
 // One kind of upload, with what a correct one and a broken one look like.
 struct AssetType {
   std::string label;
-  std::string kind;       // what the server must report
+  std::string kind;  // what the server must report
   std::string format;
   std::string fileName;
-  std::string sentKind;   // the `kind` field sent ("" = none)
+  std::string sentKind;  // the `kind` field sent ("" = none)
   std::string contentType;
   std::string bytes;      // a valid file
   std::string truncated;  // cut short
@@ -100,12 +100,12 @@ std::vector<AssetType> assetTypes() {
   std::vector<AssetType> types;
   std::string obj = kOctahedron;
   types.push_back({"obj", "mesh", "obj", "octahedron.obj", "", "", obj,
-                   obj.substr(0, obj.find("f ")),                              // vertices, no faces
+                   obj.substr(0, obj.find("f ")),                                         // vertices, no faces
                    std::string(kOctahedron).replace(obj.find("f 1 3 5"), 7, "f 1 3 99"),  // bad index
                    "texture", "octahedron.png", "image/png"});
   std::string p = png(8, 8, {255, 0, 0});
-  types.push_back({"png", "texture", "png", "red.png", "", "image/png", p, p.substr(0, p.size() / 2),
-                   damaged(p, 0.6), "mesh", "red.jpg", "image/jpeg"});
+  types.push_back({"png", "texture", "png", "red.png", "", "image/png", p, p.substr(0, p.size() / 2), damaged(p, 0.6),
+                   "mesh", "red.jpg", "image/jpeg"});
   std::string j = jpeg(16, 16, {255, 0, 0});
   types.push_back({"jpeg", "texture", "jpeg", "red.jpeg", "texture", "image/jpeg", j, j.substr(0, j.size() / 2),
                    corruptJpeg(j), "mesh", "red.png", "image/png"});
@@ -113,8 +113,8 @@ std::vector<AssetType> assetTypes() {
   types.push_back({"hdr", "environment", "hdr", "sky.hdr", "", "", h, h.substr(0, h.size() / 2), damaged(h, 0.7),
                    "texture", "sky.exr", "image/png"});
   std::string e = exr(32, 16, {0.75f, 0.5f, 2.0f});
-  types.push_back({"exr", "environment", "exr", "sky.exr", "environment", "image/x-exr", e,
-                   e.substr(0, e.size() / 2), damaged(e, 0.8), "mesh", "sky.hdr", "image/jpeg"});
+  types.push_back({"exr", "environment", "exr", "sky.exr", "environment", "image/x-exr", e, e.substr(0, e.size() / 2),
+                   damaged(e, 0.8), "mesh", "sky.hdr", "image/jpeg"});
   std::string cross = png(64, 48, {128, 128, 128});
   types.push_back({"cross png", "environment", "png", "cross.png", "environment", "", cross,
                    cross.substr(0, cross.size() / 2), damaged(cross, 0.6), "mesh", "cross.obj", "model/obj"});
@@ -129,7 +129,6 @@ httplib::MultipartFormDataItems form(const std::string& bytes, const std::string
   if (!kind.empty()) items.push_back({"kind", kind, "", ""});
   return items;
 }
-
 
 class Assets : public ::testing::Test {
  protected:
@@ -227,7 +226,7 @@ class Assets : public ::testing::Test {
     const float r = img.at(12, 12, 0), g = img.at(12, 12, 1), b = img.at(12, 12, 2);
     if (type.kind == "mesh") {
       for (int c = 0; c < 3; ++c) EXPECT_NEAR(img.at(12, 12, c), 1.0f, 1e-4f);  // white furnace
-      EXPECT_EQ(img.lum(0, 0), 0.0f);  // background hidden
+      EXPECT_EQ(img.lum(0, 0), 0.0f);                                           // background hidden
     } else if (type.kind == "texture") {
       EXPECT_GT(r, 0.8f);
       EXPECT_LT(g, 0.1f);
@@ -359,8 +358,8 @@ TEST_F(Assets, BadUploadsAre400AndLeaveTheServerWorking) {
         {"wrong content type", form(type.bytes, type.fileName, type.wrongType, kind), "file"},
     };
     // Too many bytes: padded (OBJ comments) or noise (images) past 1500 bytes.
-    std::string big = type.format == "obj" ? type.bytes + "#" + std::string(2000, 'x') + "\n"
-                      : type.format == "png" ? png(64, 48, {0, 0, 0}, true)
+    std::string big = type.format == "obj"    ? type.bytes + "#" + std::string(2000, 'x') + "\n"
+                      : type.format == "png"  ? png(64, 48, {0, 0, 0}, true)
                       : type.format == "jpeg" ? jpeg(64, 48, {0, 0, 0}, true)
                                               : type.bytes + std::string(2000, '\0');
     bad.push_back({"too many bytes", form(big, type.fileName, "", kind), "file"});
@@ -443,7 +442,7 @@ TEST_F(Assets, ClientNamesNeverBecomePaths) {
     EXPECT_TRUE(r->status == 404 || r->status == 400) << r->body;
   }
   for (std::string path : {"/api/assets/..%2F..%2Fetc%2Fpasswd", "/api/assets/%2Fetc%2Fpasswd",
-                                  "/api/assets/mesh_0000000000000000", "/api/assets/.."}) {
+                           "/api/assets/mesh_0000000000000000", "/api/assets/.."}) {
     auto r = server().client()->Get(path);
     ASSERT_TRUE(r);
     EXPECT_EQ(r->status, 404) << path << ": " << r->body;
@@ -484,10 +483,10 @@ TEST_F(Assets, BrokenStoredUploadsAreSkippedAtStart) {
   server().terminate();
 
   const fs::path dir = dataDir_ + "/assets";
-  fs::remove(dir / (lostId + ".obj"));                                    // metadata without its file
-  std::ofstream(dir / "mesh_0123456789abcdef.json") << "{not json";         // garbage metadata
+  fs::remove(dir / (lostId + ".obj"));                               // metadata without its file
+  std::ofstream(dir / "mesh_0123456789abcdef.json") << "{not json";  // garbage metadata
   std::ofstream(dir / "mesh_0123456789abcdef.obj") << kOctahedron;
-  std::ofstream(dir / "mesh_1111111111111111.obj") << kOctahedron;          // file without metadata
+  std::ofstream(dir / "mesh_1111111111111111.obj") << kOctahedron;                    // file without metadata
   std::ofstream(dir / (std::string(".tmp-") + goodId + ".obj.abc123")) << "partial";  // interrupted write
   std::ofstream(dir / "mesh_2222222222222222.obj") << kOctahedron;  // another replica's upload in progress
   // Left by a crash long ago (younger files may be another replica's write in progress).

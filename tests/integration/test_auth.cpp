@@ -164,9 +164,7 @@ std::string jv(const json& j, const std::string& key, const char* fallback) {
   return jv<std::string>(j, key, fallback);
 }
 // j[key], or null.
-json field(const json& j, const std::string& key) {
-  return j.is_object() && j.contains(key) ? j.at(key) : json();
-}
+json field(const json& j, const std::string& key) { return j.is_object() && j.contains(key) ? j.at(key) : json(); }
 
 std::ostream& operator<<(std::ostream& os, const Reply& r) {
   if (r.status == 0) return os << "no answer (" << r.transport << ")";
@@ -207,8 +205,8 @@ int openRaw(int port, const std::string& method, const std::string& path, const 
   if (fd < 0) return -1;
   timeval tv{30, 0};
   ::setsockopt(fd, SOL_SOCKET, SO_RCVTIMEO, &tv, sizeof tv);
-  std::string req = method + " " + path + " HTTP/1.1\r\nHost: 127.0.0.1:" + std::to_string(port) +
-                    "\r\nConnection: close\r\n";
+  std::string req =
+      method + " " + path + " HTTP/1.1\r\nHost: 127.0.0.1:" + std::to_string(port) + "\r\nConnection: close\r\n";
   for (const auto& [name, value] : headers) req += name + ": " + value + "\r\n";
   if (!body.empty() || method != "GET") req += "Content-Length: " + std::to_string(body.size()) + "\r\n";
   req += "\r\n" + body;
@@ -300,8 +298,8 @@ struct TestServer {
     secrets().insert(adminToken);
     std::ofstream(root + "/admin-token") << adminToken << "\n";
     ::chmod((root + "/admin-token").c_str(), 0600);
-    std::vector<std::string> args = {"--data-dir", dataDir, "--idle-timeout", "3", "--auth", "tokens",
-                                     "--admin-token-file", root + "/admin-token"};
+    std::vector<std::string> args = {"--data-dir", dataDir,  "--idle-timeout",     "3",
+                                     "--auth",     "tokens", "--admin-token-file", root + "/admin-token"};
     args.insert(args.end(), flags.begin(), flags.end());
     return proc.start(args);
   }
@@ -326,9 +324,8 @@ struct TestServer {
   std::string log() const { return proc.logTail(std::string::npos); }
 
   // One request as `token` ("" = nobody), with `extra` headers.
-  Reply call(const std::string& token, const std::string& method, const std::string& path,
-             const std::string& body = "", const std::string& type = "application/json",
-             const httplib::Headers& extra = {}) const {
+  Reply call(const std::string& token, const std::string& method, const std::string& path, const std::string& body = "",
+             const std::string& type = "application/json", const httplib::Headers& extra = {}) const {
     httplib::Request req;
     req.method = method;
     req.path = path;
@@ -506,8 +503,9 @@ struct Spawned {
     if (!::mkdtemp(tmpl)) return false;
     dir = tmpl;
     logPath = dir + "/server.log";
-    std::vector<std::string> args = {BRDFA_SERVER_BINARY, "--port", "0", "--root", BRDFA_SOURCE_DIR,
-                                     "--data-dir", dir + "/data", "--idle-timeout", "3"};
+    std::vector<std::string> args = {
+        BRDFA_SERVER_BINARY, "--port",         "0", "--root", BRDFA_SOURCE_DIR, "--data-dir",
+        dir + "/data",       "--idle-timeout", "3"};
     args.insert(args.end(), flags.begin(), flags.end());
     pid = brdfa::testsupport::spawnLogged(std::move(args), logPath, outFd, {"BRDFA_ADMIN_TOKEN"});
     return pid > 0;
@@ -632,14 +630,14 @@ struct Row {
   std::vector<std::string> hide = {};
   std::string type = "application/json";
   enum Kind { Plain, Raw, Upload } kind = Plain;
-  std::function<Vars(Who)> fresh = nullptr;                 // per-cell variables (a thing to delete)
+  std::function<Vars(Who)> fresh = nullptr;                // per-cell variables (a thing to delete)
   std::function<void(Who, const Reply&)> after = nullptr;  // cleanup after a cell
 };
 
 // What the fake (nonexistent) counterpart of each variable is.
 const Vars kFake = {{"S", "00000000deadbeef"}, {"BS", "00000000deadbeef"}, {"TS", "00000000deadbeef"},
-                    {"X", "00000000deadbeef"}, {"B", "alice/nope"},         {"U", "env_00000000deadbeef"},
-                    {"J", "job-999999"},       {"P", "nopreset"},           {"PA", "nopreset"},
+                    {"X", "00000000deadbeef"}, {"B", "alice/nope"},        {"U", "env_00000000deadbeef"},
+                    {"J", "job-999999"},       {"P", "nopreset"},          {"PA", "nopreset"},
                     {"BX", "bob/nope"}};
 
 TEST_F(AuthMatrix, EveryRouteForOwnerOtherStudentTeacherAndNobody) {
@@ -724,32 +722,70 @@ TEST_F(AuthMatrix, EveryRouteForOwnerOtherStudentTeacherAndNobody) {
       // Who am I, and the teacher's routes.
       {"GET", "/api/auth/me", "", {ok200, ok200, ok200, c401}},
       {"GET", "/api/auth/join-codes", "", {c403, c403, ok200, c401}},
-      {"POST", "/api/auth/join-codes", R"({"ttl_minutes": 5})", {c403, c403, c201, c401}, {}, "application/json",
-       Row::Plain, nullptr,
+      {"POST",
+       "/api/auth/join-codes",
+       R"({"ttl_minutes": 5})",
+       {c403, c403, c201, c401},
+       {},
+       "application/json",
+       Row::Plain,
+       nullptr,
        [](Who, const Reply& r) {
          if (r.status == 201) secrets().insert(jv(r.j(), "code", ""));
        }},
-      {"DELETE", "/api/auth/join-codes/{X}", "", {c403, c403, c204, c401}, {}, "application/json", Row::Plain,
-       [&](Who w) -> Vars { return {{"X", w == kTeacher ? s.newJoinCode().second : v["JC"]}}; }},
-      {"GET", "/api/auth/users", "", {c403, c403, ok200, c401}},
-      {"POST", "/api/auth/users", R"({"user": "zed", "display_name": "Zed"})", {c403, c403, c201, c401}, {},
-       "application/json", Row::Plain, nullptr,
-       [](Who, const Reply& r) {
-         if (r.status == 201) secrets().insert(jv(r.j(), "token", ""));
+      {"DELETE",
+       "/api/auth/join-codes/{X}",
+       "",
+       {c403, c403, c204, c401},
+       {},
+       "application/json",
+       Row::Plain,
+       [&](Who w) -> Vars {
+         return {{"X", w == kTeacher ? s.newJoinCode().second : v["JC"]}};
        }},
-      {"POST", "/api/auth/users/alice/tokens", "", {c403, c403, c201, c401}, {}, "application/json", Row::Plain,
+      {"GET", "/api/auth/users", "", {c403, c403, ok200, c401}},
+      {"POST",
+       "/api/auth/users",
+       R"({"user": "zed", "display_name": "Zed"})",
+       {c403, c403, c201, c401},
+       {},
+       "application/json",
+       Row::Plain,
        nullptr,
        [](Who, const Reply& r) {
          if (r.status == 201) secrets().insert(jv(r.j(), "token", ""));
        }},
-      {"DELETE", "/api/auth/users/alice/tokens/{X}", "", {c403, c403, c204, c401}, {}, "application/json",
-       Row::Plain, [&](Who w) -> Vars {
+      {"POST",
+       "/api/auth/users/alice/tokens",
+       "",
+       {c403, c403, c201, c401},
+       {},
+       "application/json",
+       Row::Plain,
+       nullptr,
+       [](Who, const Reply& r) {
+         if (r.status == 201) secrets().insert(jv(r.j(), "token", ""));
+       }},
+      {"DELETE",
+       "/api/auth/users/alice/tokens/{X}",
+       "",
+       {c403, c403, c204, c401},
+       {},
+       "application/json",
+       Row::Plain,
+       [&](Who w) -> Vars {
          if (w != kTeacher) return {{"X", v["A2"]}};
          Reply t = s.post(T, "/api/auth/users/alice/tokens", json::object());
          secrets().insert(jv(t.j(), "token", ""));
          return {{"X", jv(t.j(), "token_id", "")}};
        }},
-      {"DELETE", "/api/auth/users/{X}", "", {c403, c403, c204, c401}, {}, "application/json", Row::Plain,
+      {"DELETE",
+       "/api/auth/users/{X}",
+       "",
+       {c403, c403, c204, c401},
+       {},
+       "application/json",
+       Row::Plain,
        [&](Who w) -> Vars {
          if (w != kTeacher) return {{"X", "victim0"}};
          const std::string name = "victim" + std::to_string(++counter);
@@ -764,7 +800,13 @@ TEST_F(AuthMatrix, EveryRouteForOwnerOtherStudentTeacherAndNobody) {
       {"GET", "/api/brdfs/{B}", "", {ok200, c404, ok200, c401}, {"B"}},
       {"PUT", "/api/brdfs/{B}", lambert, {ok200, {403, 404}, c403, c401}, {"B"}, "text/plain"},
       {"PATCH", "/api/brdfs/{B}", R"({"shared": false})", {ok200, {403, 404}, c403, c401}, {"B"}},
-      {"DELETE", "/api/brdfs/{X}", "", {c204, c404, c204, c401}, {"X=alice/nope"}, "application/json", Row::Plain,
+      {"DELETE",
+       "/api/brdfs/{X}",
+       "",
+       {c204, c404, c204, c401},
+       {"X=alice/nope"},
+       "application/json",
+       Row::Plain,
        freshFor(
            [&](Who) {
              const std::string name = "alice/del" + std::to_string(++counter);
@@ -778,17 +820,35 @@ TEST_F(AuthMatrix, EveryRouteForOwnerOtherStudentTeacherAndNobody) {
       {"GET", "/api/brdfs/{B}/presets/{P}", "", {ok200, c404, c404, c401}, {"P"}},
       {"GET", "/api/brdfs/{B}/presets/{P}?owner=alice", "", {{}, c404, ok200, c401}, {"B"}},
       {"PUT", "/api/brdfs/{B}/presets/p2", "{}", {c201, c404, c201, c401}, {"B"}},
-      {"DELETE", "/api/brdfs/{B}/presets/{X}", "", {c204, c404, c404, c401}, {"X=nopreset"}, "application/json",
-       Row::Plain, freshPreset},
-      {"DELETE", "/api/brdfs/{B}/presets/{X}?owner=alice", "", {{}, c404, c204, c401}, {"B"}, "application/json",
-       Row::Plain, freshPreset},
+      {"DELETE",
+       "/api/brdfs/{B}/presets/{X}",
+       "",
+       {c204, c404, c404, c401},
+       {"X=nopreset"},
+       "application/json",
+       Row::Plain,
+       freshPreset},
+      {"DELETE",
+       "/api/brdfs/{B}/presets/{X}?owner=alice",
+       "",
+       {{}, c404, c204, c401},
+       {"B"},
+       "application/json",
+       Row::Plain,
+       freshPreset},
       {"GET", "/api/brdfs/ggx/presets", "", {ok200, ok200, ok200, c401}},
       {"GET", "/api/brdfs/ggx/presets/{PA}", "", {ok200, c404, c404, c401}, {"PA"}},
       {"GET", "/api/brdfs/ggx/presets/{PA}?owner=alice", "", {{}, {}, ok200, c401}},
       // The course library: the teacher's, read by everyone.
       {"GET", "/api/brdfs/course1", "", {ok200, ok200, ok200, c401}},
       {"PUT", "/api/brdfs/course1", lambert, {c403, c403, ok200, c401}, {}, "text/plain"},
-      {"DELETE", "/api/brdfs/{X}", "", {c403, c403, c204, c401}, {}, "application/json", Row::Plain,
+      {"DELETE",
+       "/api/brdfs/{X}",
+       "",
+       {c403, c403, c204, c401},
+       {},
+       "application/json",
+       Row::Plain,
        [&](Who w) -> Vars {
          if (w != kTeacher) return {{"X", "course1"}};
          const std::string name = "coursedel" + std::to_string(++counter);
@@ -801,7 +861,14 @@ TEST_F(AuthMatrix, EveryRouteForOwnerOtherStudentTeacherAndNobody) {
       {"PUT", "/api/brdfs/{BX}", lambert, {{403, 404}, c201, {}, c401}, {"BX"}, "text/plain"},
       // Sessions.
       {"GET", "/api/sessions", "", {ok200, ok200, ok200, c401}},
-      {"POST", "/api/sessions", tiny, {c201, c201, c201, c401}, {}, "application/json", Row::Plain, nullptr,
+      {"POST",
+       "/api/sessions",
+       tiny,
+       {c201, c201, c201, c401},
+       {},
+       "application/json",
+       Row::Plain,
+       nullptr,
        deleteCreated("/api/sessions/")},
       {"GET", "/api/sessions/{S}", "", {ok200, c404, ok200, c401}, {"S"}},
       {"GET", "/api/sessions/{S}/scene", "", {ok200, c404, ok200, c401}, {"S"}},
@@ -813,7 +880,13 @@ TEST_F(AuthMatrix, EveryRouteForOwnerOtherStudentTeacherAndNobody) {
       {"GET", "/api/sessions/{S}/difference?against={S}&format=json", "", {ok200, c404, ok200, c401}, {"S"}},
       {"PUT", "/api/sessions/{S}/scene", tiny, {ok200, c404, c403, c401}, {"S"}},
       {"PATCH", "/api/sessions/{S}/scene", "{}", {ok200, c404, c403, c401}, {"S"}, "application/merge-patch+json"},
-      {"DELETE", "/api/sessions/{X}", "", {c204, c404, c204, c401}, {"X"}, "application/json", Row::Plain,
+      {"DELETE",
+       "/api/sessions/{X}",
+       "",
+       {c204, c404, c204, c401},
+       {"X"},
+       "application/json",
+       Row::Plain,
        freshFor([&](Who) { return s.newSession(A); }, "S")},
       {"GET", "/api/sessions/{BS}", "", {c404, ok200, ok200, c401}, {"BS"}},
       {"GET", "/api/sessions/{TS}", "", {c404, c404, ok200, c401}, {"TS"}},
@@ -832,25 +905,61 @@ TEST_F(AuthMatrix, EveryRouteForOwnerOtherStudentTeacherAndNobody) {
       {"POST", "/api/render", renderBody(tinyScene("{B}")).dump(), {ok200, c404, ok200, c401}, {"B"}},
       {"POST", "/api/render", renderBody(tinySceneIn("{U}")).dump(), {ok200, c404, ok200, c401}, {"U"}},
       {"POST", "/api/render", renderBody(tinySceneIn("{TU}")).dump(), {ok200, ok200, ok200, c401}},
-      {"POST", "/api/analysis/polar", R"({"series": [{"brdf": "lambert"}], "resolution": 3})",
+      {"POST",
+       "/api/analysis/polar",
+       R"({"series": [{"brdf": "lambert"}], "resolution": 3})",
        {ok200, ok200, ok200, c401}},
-      {"POST", "/api/analysis/polar", R"({"series": [{"brdf": "{B}"}], "resolution": 3})",
-       {ok200, c404, ok200, c401}, {"B"}},
-      {"POST", "/api/analysis/lobe", R"({"series": [{"brdf": "lambert"}], "resolution": 3})",
+      {"POST",
+       "/api/analysis/polar",
+       R"({"series": [{"brdf": "{B}"}], "resolution": 3})",
+       {ok200, c404, ok200, c401},
+       {"B"}},
+      {"POST",
+       "/api/analysis/lobe",
+       R"({"series": [{"brdf": "lambert"}], "resolution": 3})",
        {ok200, ok200, ok200, c401}},
-      {"POST", "/api/analysis/albedo", R"({"series": [{"brdf": "lambert"}], "theta_v": [0], "samples": 2048})",
+      {"POST",
+       "/api/analysis/albedo",
+       R"({"series": [{"brdf": "lambert"}], "theta_v": [0], "samples": 2048})",
        {ok200, ok200, ok200, c401}},
-      {"POST", "/api/analysis/slice", R"({"series": [{"brdf": "lambert"}], "resolution": 3})",
+      {"POST",
+       "/api/analysis/slice",
+       R"({"series": [{"brdf": "lambert"}], "resolution": 3})",
        {ok200, ok200, ok200, c401}},
       // A scene names only uploads and BRDFs its session's owner may read.
-      {"POST", "/api/sessions", tinySceneIn("{U}").dump(), {c201, c404, c201, c401}, {"U"}, "application/json",
-       Row::Plain, nullptr, deleteCreated("/api/sessions/")},
-      {"POST", "/api/sessions", tinyScene("{B}").dump(), {c201, c404, c201, c401}, {"B"}, "application/json",
-       Row::Plain, nullptr, deleteCreated("/api/sessions/")},
-      {"POST", "/api/sessions", tinySceneIn("{TU}").dump(), {c201, c201, c201, c401}, {}, "application/json",
-       Row::Plain, nullptr, deleteCreated("/api/sessions/")},
-      {"PATCH", "/api/sessions/{BS}/scene", json{{"environment", {{"name", "{U}"}}}}.dump(), {c404, c404, c403, c401},
-       {"U"}, "application/merge-patch+json"},
+      {"POST",
+       "/api/sessions",
+       tinySceneIn("{U}").dump(),
+       {c201, c404, c201, c401},
+       {"U"},
+       "application/json",
+       Row::Plain,
+       nullptr,
+       deleteCreated("/api/sessions/")},
+      {"POST",
+       "/api/sessions",
+       tinyScene("{B}").dump(),
+       {c201, c404, c201, c401},
+       {"B"},
+       "application/json",
+       Row::Plain,
+       nullptr,
+       deleteCreated("/api/sessions/")},
+      {"POST",
+       "/api/sessions",
+       tinySceneIn("{TU}").dump(),
+       {c201, c201, c201, c401},
+       {},
+       "application/json",
+       Row::Plain,
+       nullptr,
+       deleteCreated("/api/sessions/")},
+      {"PATCH",
+       "/api/sessions/{BS}/scene",
+       json{{"environment", {{"name", "{U}"}}}}.dump(),
+       {c404, c404, c403, c401},
+       {"U"},
+       "application/merge-patch+json"},
       // Uploads.
       {"GET", "/api/assets", "", {ok200, ok200, ok200, c401}},
       {"GET", "/api/assets?kind=environment", "", {ok200, ok200, ok200, c401}},
@@ -862,12 +971,32 @@ TEST_F(AuthMatrix, EveryRouteForOwnerOtherStudentTeacherAndNobody) {
   std::vector<Row> jobRows = {
       {"POST", "/api/jobs/validate", R"({"names": ["lambert"]})", {c202, c202, c202, c401}},
       {"POST", "/api/jobs/validate", R"({"names": ["{B}"]})", {c202, c404, c202, c401}, {"B"}},
-      {"POST", "/api/jobs/convergence", comparison(tinyScene(), false).dump(), {c202, c202, c202, c401}, {},
-       "application/json", Row::Plain, nullptr, deleteCreated("/api/jobs/")},
-      {"POST", "/api/jobs/convergence", comparison(tinyScene("{B}"), false).dump(), {c202, c404, c202, c401}, {"B"},
-       "application/json", Row::Plain, nullptr, deleteCreated("/api/jobs/")},
+      {"POST",
+       "/api/jobs/convergence",
+       comparison(tinyScene(), false).dump(),
+       {c202, c202, c202, c401},
+       {},
+       "application/json",
+       Row::Plain,
+       nullptr,
+       deleteCreated("/api/jobs/")},
+      {"POST",
+       "/api/jobs/convergence",
+       comparison(tinyScene("{B}"), false).dump(),
+       {c202, c404, c202, c401},
+       {"B"},
+       "application/json",
+       Row::Plain,
+       nullptr,
+       deleteCreated("/api/jobs/")},
       {"GET", "/api/jobs/{J}", "", {ok200, c404, ok200, c401}, {"J"}},
-      {"DELETE", "/api/jobs/{X}", "", {ok200, c404, ok200, c401}, {"X"}, "application/json", Row::Plain,
+      {"DELETE",
+       "/api/jobs/{X}",
+       "",
+       {ok200, c404, ok200, c401},
+       {"X"},
+       "application/json",
+       Row::Plain,
        freshFor(
            [&](Who) {
              Reply r = s.post(A, "/api/jobs/convergence", comparison(tinyScene(), true));
@@ -892,8 +1021,8 @@ TEST_F(AuthMatrix, EveryRouteForOwnerOtherStudentTeacherAndNobody) {
         Vars vars = v;
         if (row.fresh)
           for (auto& [name, value] : row.fresh(w)) vars[name] = value;
-        const std::string what =
-            row.method + " " + subst(row.path, vars) + " as " + kWhoName[w] + " (row " + row.method + " " + row.path + ")";
+        const std::string what = row.method + " " + subst(row.path, vars) + " as " + kWhoName[w] + " (row " +
+                                 row.method + " " + row.path + ")";
         Reply r = runCell(row, w, vars);
         ++cells;
         const Codes& want = row.expect.of(w);
@@ -1030,7 +1159,8 @@ TEST_F(AuthMatrix, CourseBrdfsNamespacesAndSharing) {
   ASSERT_EQ(s.call(T, "PUT", "/api/brdfs/course_ggx", lambert, "text/plain").status, 201);
   Reply course = s.get(A, "/api/brdfs/course_ggx");
   EXPECT_EQ(course.status, 200) << course;
-  EXPECT_TRUE(course.j().contains("owner") && course.j()["owner"].is_null()) << "a course BRDF has owner null: " << course;
+  EXPECT_TRUE(course.j().contains("owner") && course.j()["owner"].is_null())
+      << "a course BRDF has owner null: " << course;
   EXPECT_EQ(s.call(A, "PUT", "/api/brdfs/course_ggx", lambert, "text/plain").status, 403);
   EXPECT_EQ(s.call(A, "DELETE", "/api/brdfs/course_ggx").status, 403);
 
@@ -1116,10 +1246,10 @@ TEST_F(AuthMatrix, ViewKeyReadsFramesOnly) {
   std::string wrong = key;
   wrong[0] = wrong[0] == 'a' ? 'b' : 'a';
   for (const std::string& path :
-       {"/api/sessions/" + id + "/frame?min_spp=0&key=" + wrong, "/api/sessions/" + id + "/frame?min_spp=0&key=",
-        "/api/sessions/" + bs + "/frame?min_spp=0&key=" + key, "/api/sessions/" + id + "/scene?key=" + key,
-        "/api/sessions/" + id + "/stats?key=" + key, "/api/sessions/" + id + "?key=" + key,
-        "/api/sessions?key=" + key}) {
+       {"/api/sessions/" + id + "/frame?min_spp=0&key=" + wrong,
+        "/api/sessions/" + id + "/frame?min_spp=0&key=", "/api/sessions/" + bs + "/frame?min_spp=0&key=" + key,
+        "/api/sessions/" + id + "/scene?key=" + key, "/api/sessions/" + id + "/stats?key=" + key,
+        "/api/sessions/" + id + "?key=" + key, "/api/sessions?key=" + key}) {
     Reply r = s.get("", path);
     EXPECT_EQ(r.status, 401) << "GET " << path << ": " << r;
     expectWellFormed(r, "GET " + path);
@@ -1146,12 +1276,12 @@ TEST_F(AuthMatrix, CrossSiteWritesAreRefusedAndThereIsNoCors) {
   const size_t before = s.sessionIds(T).size();
   const std::string body = tinyScene().dump();
 
-  for (const auto& [name, value] : std::vector<std::pair<std::string, std::string>>{
-           {"Origin", "http://evil.example"},
-           {"Origin", "null"},
-           {"Origin", "http://127.0.0.1:1"},
-           {"Origin", "http://localhost:" + std::to_string(s.port())},
-           {"Sec-Fetch-Site", "cross-site"}}) {
+  for (const auto& [name, value] :
+       std::vector<std::pair<std::string, std::string>>{{"Origin", "http://evil.example"},
+                                                        {"Origin", "null"},
+                                                        {"Origin", "http://127.0.0.1:1"},
+                                                        {"Origin", "http://localhost:" + std::to_string(s.port())},
+                                                        {"Sec-Fetch-Site", "cross-site"}}) {
     Reply r = s.call(A, "POST", "/api/sessions", body, "application/json", {{name, value}});
     EXPECT_EQ(r.status, 403) << name << ": " << value << ": " << r;
     EXPECT_EQ(r.error(), "cross_site") << name << ": " << value << ": " << r;
@@ -1177,7 +1307,8 @@ TEST_F(AuthMatrix, CrossSiteWritesAreRefusedAndThereIsNoCors) {
   Reply del = s.call(A, "DELETE", "/api/sessions/" + id, "", "", {{"Origin", "http://evil.example"}});
   EXPECT_EQ(del.status, 403) << del;
   EXPECT_EQ(s.get(A, "/api/sessions/" + id).status, 200) << "a cross-site DELETE removed the session";
-  Reply brdf = s.call(A, "PUT", "/api/brdfs/alice/evil", kLambertWhite, "text/plain", {{"Sec-Fetch-Site", "cross-site"}});
+  Reply brdf =
+      s.call(A, "PUT", "/api/brdfs/alice/evil", kLambertWhite, "text/plain", {{"Sec-Fetch-Site", "cross-site"}});
   EXPECT_EQ(brdf.status, 403) << brdf;
   EXPECT_EQ(s.get(A, "/api/brdfs/alice/evil").status, 404);
   Reply patch = s.call(A, "PATCH", "/api/sessions/" + id + "/scene", R"({"render": {"width": 32}})",
@@ -1223,7 +1354,8 @@ TEST_F(AuthTokens, MeDescribesEachCaller) {
   Reply anon = s.get("", "/api/auth/me");
   EXPECT_EQ(anon.status, 401);
   expectWellFormed(anon, "GET /api/auth/me without a token");
-  for (const std::string& bad : {std::string("brdfa_not-a-real-token-0000000000000000000000"), T + "x", std::string("short")}) {
+  for (const std::string& bad :
+       {std::string("brdfa_not-a-real-token-0000000000000000000000"), T + "x", std::string("short")}) {
     Reply r = s.get(bad, "/api/auth/me");
     EXPECT_EQ(r.status, 401) << bad << ": " << r;
   }
@@ -1387,8 +1519,9 @@ const std::string& largePng() {
 
 struct TightFlags {
   static std::vector<std::string> flags() {
-    return {"--quota-sessions", "2", "--quota-brdfs", "3", "--quota-uploads", "2", "--quota-upload-bytes",
-            std::to_string(largePng().size() + smallPng().size() / 2), "--quota-jobs", "1", "--quota-renders", "1"};
+    return {"--quota-sessions", "2", "--quota-brdfs",        "3",
+            "--quota-uploads",  "2", "--quota-upload-bytes", std::to_string(largePng().size() + smallPng().size() / 2),
+            "--quota-jobs",     "1", "--quota-renders",      "1"};
   }
 };
 
@@ -1416,7 +1549,7 @@ TEST_F(AuthQuotas, Sessions) {
   expectQuota(over, "sessions", 2, "alice's third session");
   EXPECT_EQ(jv(over.j(), "used", -1), 2);
   EXPECT_EQ(s.sessionIds(a).size() - s.sessionIds(a).count("default"), 2u) << "the refused session exists";
-  made.emplace_back(b, s.newSession(b));  // bob is not affected
+  made.emplace_back(b, s.newSession(b));                              // bob is not affected
   for (int i = 0; i < 3; ++i) made.emplace_back(T, s.newSession(T));  // nor the teacher, who has no quota
   // Deleting one frees room.
   ASSERT_EQ(s.call(a, "DELETE", "/api/sessions/" + made[0].second).status, 204);
@@ -1463,7 +1596,8 @@ TEST_F(AuthQuotas, UploadsAndUploadBytes) {
   for (const json& asset : s.get(a, "/api/assets").j()) alices += jv(asset, "builtin", true) ? 0 : 1;
   EXPECT_EQ(alices, 2) << "a refused upload was kept";
   EXPECT_EQ(s.upload(b, largePng(), "big.png").status, 201) << "bob is not affected";
-  for (int i = 0; i < 3; ++i) EXPECT_EQ(s.upload(T, largePng(), "course.png").status, 201) << "the teacher has no quota";
+  for (int i = 0; i < 3; ++i)
+    EXPECT_EQ(s.upload(T, largePng(), "course.png").status, 201) << "the teacher has no quota";
 }
 
 TEST_F(AuthQuotas, Jobs) {
@@ -1570,7 +1704,8 @@ TEST_F(AuthQuotas, RacingRequestsNeverPassAQuota) {
   };
   auto count = [](const std::vector<int>& v, int status) { return int(std::count(v.begin(), v.end(), status)); };
 
-  auto [sessions, bobSession] = race([&](const std::string& who, int) { return s.post(who, "/api/sessions", tinyScene()); });
+  auto [sessions, bobSession] =
+      race([&](const std::string& who, int) { return s.post(who, "/api/sessions", tinyScene()); });
   EXPECT_EQ(count(sessions, 201), 2) << "sessions made at once past --quota-sessions 2";
   EXPECT_EQ(count(sessions, 429), kRacers - 2);
   EXPECT_EQ(bobSession, 201);
@@ -1587,9 +1722,8 @@ TEST_F(AuthQuotas, RacingRequestsNeverPassAQuota) {
   for (const json& e : s.get(a, "/api/brdfs").j()) saved += jv(e, "owner", "") == "qx-alice";
   EXPECT_EQ(saved, 3) << "alice's library holds more than her quota";
 
-  auto [uploads, bobUpload] = race([&](const std::string& who, int i) {
-    return s.upload(who, smallPng(), std::to_string(i) + ".png");
-  });
+  auto [uploads, bobUpload] =
+      race([&](const std::string& who, int i) { return s.upload(who, smallPng(), std::to_string(i) + ".png"); });
   EXPECT_EQ(count(uploads, 201), 2) << "uploads at once past --quota-uploads 2";
   EXPECT_EQ(count(uploads, 429), kRacers - 2);
   EXPECT_EQ(bobUpload, 201);
@@ -1616,7 +1750,8 @@ TEST(AuthModes, NoneOnAPublicAddressNeedsAllowUnauthenticated) {
     ASSERT_GT(port, 0) << allowed.log();
     const std::string log = lower(allowed.log());
     EXPECT_TRUE(log.find("warn") != std::string::npos || log.find("anyone") != std::string::npos)
-        << "no warning at start-up:\n" << allowed.log();
+        << "no warning at start-up:\n"
+        << allowed.log();
     httplib::Client cli("127.0.0.1", port);
     auto me = cli.Get("/api/auth/me");
     ASSERT_TRUE(me);
@@ -1714,17 +1849,19 @@ TEST(AuthModes, ProxyTrustsTheUserHeaderFromItsFrontOnly) {
   // From an address that is not the front, the header is ignored.
   Reply elsewhere = rawRequest(s.port(), "GET", "/api/auth/me", as("alice"), "", "127.0.0.2");
   EXPECT_EQ(elsewhere.status, 401) << elsewhere;
-  Reply elsewhereWrite = rawRequest(s.port(), "POST", "/api/sessions",
-                                    {{"X-Forwarded-User", "prof"}, {"X-Brdfa-Client", "1"},
-                                     {"Content-Type", "application/json"}},
-                                    scene, "127.0.0.2");
+  Reply elsewhereWrite =
+      rawRequest(s.port(), "POST", "/api/sessions",
+                 {{"X-Forwarded-User", "prof"}, {"X-Brdfa-Client", "1"}, {"Content-Type", "application/json"}}, scene,
+                 "127.0.0.2");
   EXPECT_EQ(elsewhereWrite.status, 401) << elsewhereWrite;
   EXPECT_EQ(listed("prof").size(), before);
 
   // The token routes belong to tokens mode.
-  for (const auto& [method, path] : std::vector<std::pair<std::string, std::string>>{
-           {"POST", "/api/auth/users"}, {"GET", "/api/auth/users"}, {"POST", "/api/auth/join-codes"},
-           {"GET", "/api/auth/join-codes"}, {"POST", "/api/auth/logout"}}) {
+  for (const auto& [method, path] : std::vector<std::pair<std::string, std::string>>{{"POST", "/api/auth/users"},
+                                                                                     {"GET", "/api/auth/users"},
+                                                                                     {"POST", "/api/auth/join-codes"},
+                                                                                     {"GET", "/api/auth/join-codes"},
+                                                                                     {"POST", "/api/auth/logout"}}) {
     Reply r = s.call("", method, path, method == "POST" ? R"({"user": "x"})" : "", "application/json", as("prof"));
     EXPECT_EQ(r.status, 400) << method << " " << path << ": " << r;
     EXPECT_EQ(r.error(), "unsupported") << method << " " << path << ": " << r;
@@ -1747,8 +1884,8 @@ TEST(AuthModes, NoneOnLoopbackIsTheTeacher) {
   EXPECT_EQ(s.post("", "/api/auth/users", {{"user", "x"}}).status, 400);
   EXPECT_EQ(jv(s.post("", "/api/auth/users", {{"user", "x"}}).j(), "error", ""), "unsupported");
   // Cross-site refusals hold in every mode.
-  Reply evil = s.call("", "POST", "/api/sessions", tinyScene().dump(), "application/json",
-                      {{"Origin", "http://evil.example"}});
+  Reply evil =
+      s.call("", "POST", "/api/sessions", tinyScene().dump(), "application/json", {{"Origin", "http://evil.example"}});
   EXPECT_EQ(evil.status, 403) << evil;
   EXPECT_EQ(evil.error(), "cross_site") << evil;
   EXPECT_EQ(corsHeaders(evil), "");

@@ -57,9 +57,7 @@ int srgbCode(double linear) {
 }
 
 // Narkowicz 2015 ACES fit, as the brief and shaders/lib/tonemap.glsl state it.
-double acesFit(double x) {
-  return std::clamp((x * (2.51 * x + 0.03)) / (x * (2.43 * x + 0.59) + 0.14), 0.0, 1.0);
-}
+double acesFit(double x) { return std::clamp((x * (2.51 * x + 0.03)) / (x * (2.43 * x + 0.59) + 0.14), 0.0, 1.0); }
 
 json whiteFurnace(const std::string& tonemap, double exposure) {
   json scene = furnaceScene("lambert", {{"Kd", {1, 1, 1}}}, 32, 4, 4);
@@ -81,8 +79,13 @@ class FrameSaver : public ServerTest {
 TEST_F(FrameSaver, SessionExrHoldsThePfmFloats) {
   json scene = {{"environment", {{"name", "sky"}, {"visible", true}}},
                 {"objects", json::array({{{"mesh", "sphere"}, {"brdf", "ggx"}}})},
-                {"render", {{"width", 40}, {"height", 24}, {"max_samples", 8}, {"samples_per_frame", 4},
-                            {"exposure", 3}, {"tonemap", "aces"}}}};
+                {"render",
+                 {{"width", 40},
+                  {"height", 24},
+                  {"max_samples", 8},
+                  {"samples_per_frame", 4},
+                  {"exposure", 3},
+                  {"tonemap", "aces"}}}};
   const std::string id = newSession(scene);
   ASSERT_FALSE(id.empty());
   auto pfm = get("/api/sessions/" + id + "/frame?format=pfm&min_spp=8");

@@ -66,11 +66,12 @@ TEST_F(Hostile, UserCodeCannotReachTheIntegratorsResources) {
     int line;              // of the first diagnostic; 0: not checked
     const char* fragment;  // in the message or a diagnostic
   };
-  for (const Case& c : {Case{"names_accumulators.brdf", 7, "brdfa_accum"},
-                        Case{"own_buffer_on_accumulators.brdf", 6, "set 0, binding 3, which the integrator already uses"},
-                        Case{"shared_memory_and_barrier.brdf", 0, "shared memory"},
-                        Case{"shared_memory_and_barrier.brdf", 0, "a barrier"},
-                        Case{"unused_slot.brdf", 5, "set 0, binding 1, which the pipeline layout does not have"}}) {
+  for (const Case& c :
+       {Case{"names_accumulators.brdf", 7, "brdfa_accum"},
+        Case{"own_buffer_on_accumulators.brdf", 6, "set 0, binding 3, which the integrator already uses"},
+        Case{"shared_memory_and_barrier.brdf", 0, "shared memory"},
+        Case{"shared_memory_and_barrier.brdf", 0, "a barrier"},
+        Case{"unused_slot.brdf", 5, "set 0, binding 1, which the pipeline layout does not have"}}) {
     const std::string text = readRepoFile(std::string("tests/hostile/") + c.file);
     ASSERT_FALSE(text.empty()) << c.file;
     for (const char* route : {"/api/brdfs/validate", "/api/brdfs/hostile_resource"}) {
@@ -176,8 +177,8 @@ TEST_F(MemoryBudgetShrink, AViewThatFitsOnlyWithoutUnusedProgramsDropsThemAndSay
   const nlohmann::json renderer = before["renderer"];
   const uint64_t budget = renderer.value("budget_bytes", 0ull);
   uint64_t used = 0;
-  for (const char* use : {"process_bytes", "render_targets_bytes", "assets_bytes", "transfers_bytes", "programs_bytes",
-                          "compiles_bytes"})
+  for (const char* use :
+       {"process_bytes", "render_targets_bytes", "assets_bytes", "transfers_bytes", "programs_bytes", "compiles_bytes"})
     used += renderer.value(use, 0ull);
   const uint64_t targets128 = renderer.value("render_targets_bytes", 0ull);
   const uint64_t programs = renderer.value("programs_bytes", 0ull);
@@ -196,7 +197,8 @@ TEST_F(MemoryBudgetShrink, AViewThatFitsOnlyWithoutUnusedProgramsDropsThemAndSay
   ASSERT_GT(double(side) * side * perPixel, double(budget - (used - targets128)) + (2 << 20))
       << "the view must not fit as things are";
 
-  auto resized = put("/api/sessions/" + id + "/scene", furnaceScene("lambert", nlohmann::json::object(), side, 4, 4).dump());
+  auto resized =
+      put("/api/sessions/" + id + "/scene", furnaceScene("lambert", nlohmann::json::object(), side, 4, 4).dump());
   ASSERT_TRUE(resized);
   ASSERT_EQ(resized->status, 200) << side << "^2: " << resized->body.substr(0, 400);
   const nlohmann::json after = bodyJson(get("/api/health"))["memory"];

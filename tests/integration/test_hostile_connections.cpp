@@ -64,7 +64,8 @@ TEST_F(HostileSlowClients, SlowLorisConnectionsAreCutAtTheReadDeadline) {
   // 70 connections, more than the 16 workers, each sending its request a byte a second: with
   // httplib's per-recv timeout alone they would hold every worker for as long as they trickle.
   constexpr int kSlow = 70;
-  const std::string request = "GET /api/health HTTP/1.1\r\nHost: 127.0.0.1\r\nX-Slow: " + std::string(40, 'z') + "\r\n\r\n";
+  const std::string request =
+      "GET /api/health HTTP/1.1\r\nHost: 127.0.0.1\r\nX-Slow: " + std::string(40, 'z') + "\r\n\r\n";
   std::vector<int> fds;
   std::vector<Clock::time_point> openedAt;
   std::vector<double> closedAfter(kSlow, -1.0);
@@ -131,8 +132,9 @@ TEST_F(HostileSlowClients, ABodyTrickledAfterItsHeadersIsCutToo) {
   const int fd = connectTo(server_->port());
   ASSERT_GE(fd, 0);
   const auto start = Clock::now();
-  ASSERT_TRUE(sendAll(fd, "POST /api/render HTTP/1.1\r\nHost: 127.0.0.1\r\nContent-Type: application/json\r\n"
-                          "Content-Length: 100\r\n\r\n{"));
+  ASSERT_TRUE(sendAll(fd,
+                      "POST /api/render HTTP/1.1\r\nHost: 127.0.0.1\r\nContent-Type: application/json\r\n"
+                      "Content-Length: 100\r\n\r\n{"));
   bool closed = false;
   while (!closed && secondsSince(start) < 8) {
     std::this_thread::sleep_for(std::chrono::milliseconds(500));
@@ -226,22 +228,21 @@ class HostileAbandonedRender : public ServerTest {};
 
 TEST_F(HostileAbandonedRender, AOneShotWhoseClientLeftGivesItsSlotBackWithinAPass) {
   // Compile the BRDF's pipeline first, so the timings below are of rendering alone.
-  const nlohmann::json small = {{"scene", furnaceScene("lambert", nlohmann::json::object(), 32, 4, 4)},
-                                {"spp", 4},
-                                {"format", "pfm"}};
+  const nlohmann::json small = {
+      {"scene", furnaceScene("lambert", nlohmann::json::object(), 32, 4, 4)}, {"spp", 4}, {"format", "pfm"}};
   auto warm = post("/api/render", small.dump());
   ASSERT_TRUE(warm);
   ASSERT_EQ(warm->status, 200) << warm->body.substr(0, 300);
 
   // Two renders that would take minutes (65536 samples, 4 a pass, 256 x 256) take both slots;
   // their clients hang up after half a second.
-  const nlohmann::json huge = {{"scene", furnaceScene("lambert", nlohmann::json::object(), 256, 65536, 4)},
-                               {"spp", 65536},
-                               {"format", "pfm"}};
+  const nlohmann::json huge = {
+      {"scene", furnaceScene("lambert", nlohmann::json::object(), 256, 65536, 4)}, {"spp", 65536}, {"format", "pfm"}};
   const std::string body = huge.dump();
-  const std::string request = "POST /api/render HTTP/1.1\r\nHost: 127.0.0.1\r\nContent-Type: application/json\r\n"
-                              "Content-Length: " +
-                              std::to_string(body.size()) + "\r\n\r\n" + body;
+  const std::string request =
+      "POST /api/render HTTP/1.1\r\nHost: 127.0.0.1\r\nContent-Type: application/json\r\n"
+      "Content-Length: " +
+      std::to_string(body.size()) + "\r\n\r\n" + body;
   int a = connectTo(server_->port()), b = connectTo(server_->port());
   ASSERT_GE(a, 0);
   ASSERT_GE(b, 0);

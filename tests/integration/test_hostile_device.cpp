@@ -124,9 +124,8 @@ Outcome sessionFrame(ServerProcess& server, const std::string& name, int size) {
   return out;
 }
 
-// Opens `count` connections from another client address that send a request a byte a second. 200 when every one of them was
-// refused or cut within 10 s and a health request sent meanwhile was answered within 2 s;
-// else 0, with the figures.
+// Opens `count` connections from another client address that send a request a byte a second. 200 when every one of them
+// was refused or cut within 10 s and a health request sent meanwhile was answered within 2 s; else 0, with the figures.
 Outcome slowLoris(ServerProcess& server, int count) {
   const std::string request = "GET /api/health HTTP/1.1\r\nHost: 127.0.0.1\r\n\r\n";
   std::vector<int> fds;
@@ -147,13 +146,16 @@ Outcome slowLoris(ServerProcess& server, int count) {
   for (size_t sent = 0; open > 0 && Clock::now() - start < std::chrono::seconds(10); ++sent) {
     for (size_t i = 0; i < fds.size(); ++i) {
       if (closed[i]) continue;
-      if (closedByServer(fds[i]) || !sendAll(fds[i], request.substr(sent % request.size(), 1))) closed[i] = true, --open;
+      if (closedByServer(fds[i]) || !sendAll(fds[i], request.substr(sent % request.size(), 1)))
+        closed[i] = true, --open;
     }
     std::this_thread::sleep_for(std::chrono::seconds(1));
   }
   health.join();
   for (int fd : fds) ::close(fd);
-  const json figures{{"connections", fds.size()}, {"still_open", open}, {"health_status", healthStatus},
+  const json figures{{"connections", fds.size()},
+                     {"still_open", open},
+                     {"health_status", healthStatus},
                      {"health_seconds", healthSeconds}};
   const bool held = fds.size() == size_t(count) && open == 0 && healthStatus == 200 && healthSeconds < 2.0;
   return {held ? 200 : 0, figures};
@@ -162,10 +164,13 @@ Outcome slowLoris(ServerProcess& server, int count) {
 // Two one-shots that would run for minutes, whose clients hang up after 0.5 s; then a small
 // one-shot, whose status is the outcome (503 if the abandoned ones kept the slots).
 Outcome abandonedOneShots(ServerProcess& server) {
-  const json huge = {{"scene", furnaceScene("lambert", json::object(), 256, 65536, 4)}, {"spp", 65536}, {"format", "pfm"}};
+  const json huge = {
+      {"scene", furnaceScene("lambert", json::object(), 256, 65536, 4)}, {"spp", 65536}, {"format", "pfm"}};
   const std::string body = huge.dump();
-  const std::string request = "POST /api/render HTTP/1.1\r\nHost: 127.0.0.1\r\nContent-Type: application/json\r\n"
-                              "Content-Length: " + std::to_string(body.size()) + "\r\n\r\n" + body;
+  const std::string request =
+      "POST /api/render HTTP/1.1\r\nHost: 127.0.0.1\r\nContent-Type: application/json\r\n"
+      "Content-Length: " +
+      std::to_string(body.size()) + "\r\n\r\n" + body;
   int a = connectTo(server.port()), b = connectTo(server.port());
   if (a < 0 || b < 0 || !sendAll(a, request) || !sendAll(b, request)) return {};
   std::this_thread::sleep_for(std::chrono::milliseconds(500));
@@ -200,14 +205,24 @@ TEST_F(HostileDevice, EachAttackGetsItsStatusWhileAnotherSessionStreams) {
   };
   std::vector<Attack> attacks{
       // The driver's compile of a million-float array never ends: past the pass budget.
-      {"huge private array", [&] { return sessionFrame(*server_, "hostile_huge_array_alias", 256); }, {422}, "render_budget"},
+      {"huge private array",
+       [&] { return sessionFrame(*server_, "hostile_huge_array_alias", 256); },
+       {422},
+       "render_budget"},
       // llvmpipe caps each loop at 65535 rounds, so these render (slowly, in short
       // submissions); a driver without the cap stops at the pass budget.
-      {"infinite loop", [&] { return sessionFrame(*server_, "hostile_infinite_loop", 256); }, {200, 422}, "render_budget"},
-      {"billion-round loop", [&] { return sessionFrame(*server_, "hostile_billion_loop", 256); }, {200, 422}, "render_budget"},
+      {"infinite loop",
+       [&] { return sessionFrame(*server_, "hostile_infinite_loop", 256); },
+       {200, 422},
+       "render_budget"},
+      {"billion-round loop",
+       [&] { return sessionFrame(*server_, "hostile_billion_loop", 256); },
+       {200, 422},
+       "render_budget"},
       {"macro bomb",
        [&] {
-         auto r = server_->client(30)->Post("/api/brdfs/validate", readRepoFile("tests/hostile/macro_bomb.brdf"), "text/plain");
+         auto r = server_->client(30)->Post("/api/brdfs/validate", readRepoFile("tests/hostile/macro_bomb.brdf"),
+                                            "text/plain");
          return r ? Outcome{r->status, bodyJson(r)} : Outcome{};
        },
        {422},
@@ -246,10 +261,14 @@ TEST_F(HostileDevice, EachAttackGetsItsStatusWhileAnotherSessionStreams) {
       // Two one-shots of 65536 samples whose clients hang up: a third gets a slot at once.
       {"two abandoned one-shot renders", [&] { return abandonedOneShots(*server_); }, {200}, ""},
       // Quarantined above: refused at once, without reaching the device.
-      {"the quarantined program again", [&] { return sessionFrame(*server_, "hostile_huge_array_alias", 64); }, {422}, "render_budget"},
+      {"the quarantined program again",
+       [&] { return sessionFrame(*server_, "hostile_huge_array_alias", 64); },
+       {422},
+       "render_budget"},
   };
   // The array under a name of its own, so the quarantine message can be checked to name it.
-  ASSERT_TRUE(put("/api/brdfs/hostile_huge_array_alias", readRepoFile("tests/hostile/huge_private_array.brdf"), "text/plain"));
+  ASSERT_TRUE(
+      put("/api/brdfs/hostile_huge_array_alias", readRepoFile("tests/hostile/huge_private_array.brdf"), "text/plain"));
 
   // The whole process tree's resident memory (server, render worker and its spare, compile
   // workers), sampled every 50 ms: it must stay under --max-memory (768 MiB here).
@@ -309,15 +328,17 @@ TEST_F(HostileDevice, EachAttackGetsItsStatusWhileAnotherSessionStreams) {
     if (!kSanitizedBuild) {
       EXPECT_LT(peakMiB, 768.0) << attack.name << ": the server's processes passed --max-memory";
     }
-    std::printf("%-42s %d in %5.2f s; streaming session's longest gap %.2f s, next frame after %.2f s; peak RSS %.0f MiB\n",
-                attack.name, out.status, seconds, gap, next, peakMiB);
+    std::printf(
+        "%-42s %d in %5.2f s; streaming session's longest gap %.2f s, next frame after %.2f s; peak RSS %.0f MiB\n",
+        attack.name, out.status, seconds, gap, next, peakMiB);
   }
   const json h = health();
   EXPECT_GT(h["render_worker"].value("restarts", uint64_t(0)), restartsBefore) << "the array never stopped the worker";
   EXPECT_GE(h["render_worker"].value("quarantined_programs", uint64_t(0)), 1u);
 
   del("/api/sessions/" + streamer);
-  for (const char* name : {"hostile_huge_private_array", "hostile_infinite_loop", "hostile_billion_loop", "hostile_huge_array_alias"})
+  for (const char* name :
+       {"hostile_huge_private_array", "hostile_infinite_loop", "hostile_billion_loop", "hostile_huge_array_alias"})
     del(std::string("/api/brdfs/") + name);
 }
 
@@ -357,7 +378,8 @@ TEST(HostileShutdown, SigtermWhileTheDeviceIsHeldExitsWithinFiveSeconds) {
   auto cli = server.client(60);
   auto r = cli->Put("/api/brdfs/held", readRepoFile("tests/hostile/huge_private_array.brdf"), "text/plain");
   ASSERT_TRUE(r && r->status == 201);
-  r = cli->Put("/api/sessions/default/scene", furnaceScene("held", json::object(), 64, 4, 4).dump(), "application/json");
+  r = cli->Put("/api/sessions/default/scene", furnaceScene("held", json::object(), 64, 4, 4).dump(),
+               "application/json");
   ASSERT_TRUE(r && r->status == 200) << (r ? r->body : "");
   std::thread waiter([&] { server.client(60)->Get("/api/sessions/default/frame?min_spp=1"); });
   std::this_thread::sleep_for(std::chrono::seconds(2));  // the driver's compile is under way

@@ -55,8 +55,7 @@ std::string lambertVersion(int k) {
   return "analytic\n# version " + std::to_string(k) + " " + pad +
          "\n::begin parameters\ncolor Kd 1 1 1\n::end parameters\n::begin shader\n"
          "vec3 BRDF(vec3 L, vec3 V, vec3 N, vec3 X, vec3 Y)\n{\n    return Kd * " +
-         std::to_string(1.0 - k * 1e-6) + " / 3.14159265358979;\n}\n::end shader\n# end " + std::to_string(k) +
-         "\n";
+         std::to_string(1.0 - k * 1e-6) + " / 3.14159265358979;\n}\n::end shader\n# end " + std::to_string(k) + "\n";
 }
 
 // A server on `dataDir`; fails the test when it does not start.
@@ -401,7 +400,8 @@ TEST_F(LibraryApi, BuiltinsAreReadOnlyAndNamesAreChecked) {
 TEST_F(LibraryApi, LargeBrdfIsReadAsTextWhateverItsContentType) {
   std::string text = readRepoFile("shaders/brdfs/lambert.brdf");
   ASSERT_FALSE(text.empty());
-  while (text.size() < 64 * 1024) text += "# padding: a long comment, as a well-documented file has " + std::to_string(text.size()) + "\n";
+  while (text.size() < 64 * 1024)
+    text += "# padding: a long comment, as a well-documented file has " + std::to_string(text.size()) + "\n";
   for (const char* type : {"application/x-www-form-urlencoded", "text/plain", "application/octet-stream"}) {
     auto r = post("/api/brdfs/validate", text, type);
     ASSERT_TRUE(r);
@@ -686,8 +686,8 @@ TEST_F(LibraryApi, BatchJobOverAllRunsWhileTheStreamKeepsDelivering) {
       EXPECT_TRUE(res.contains(key)) << key << " missing: " << res.dump();
     // Built-ins compile; the check either reports numbers or says why it could not run.
     const json& checks = res["checks"];
-    EXPECT_TRUE(checks.contains("error") || (checks.contains("nan") && checks.contains("max_albedo") &&
-                                             checks.contains("max_reciprocity_error")))
+    EXPECT_TRUE(checks.contains("error") ||
+                (checks.contains("nan") && checks.contains("max_albedo") && checks.contains("max_reciprocity_error")))
         << res.dump();
   }
   EXPECT_EQ(names.size(), brdfCount);
@@ -705,7 +705,8 @@ TEST_F(LibraryApi, BatchTestOfEveryBuiltinHoldsItsClaims) {
       "analytic\n::begin parameters\nfloat k 0 1 0.5\n::end parameters\n::begin shader\n"
       "vec3 BRDF(vec3 L, vec3 V, vec3 N, vec3 X, vec3 Y) {\n  return ";
   auto r = put("/api/brdfs/claims_reciprocity",
-               "# claims: reciprocity, non-negativity\n" + frame + "vec3(k + max(dot(N, V), 0.0)) / 3.14159265;\n}\n::end shader\n",
+               "# claims: reciprocity, non-negativity\n" + frame +
+                   "vec3(k + max(dot(N, V), 0.0)) / 3.14159265;\n}\n::end shader\n",
                "text/plain");
   ASSERT_TRUE(r && r->status == 201) << (r ? r->body : "");
   r = put("/api/brdfs/claims_energy",

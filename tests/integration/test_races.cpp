@@ -37,8 +37,8 @@ TEST_F(Races, MixedLibraryAndPresetTrafficFromEightClientsNeverCrashes) {
     std::set<int> allowed;
   };
   const std::vector<Op> ops = {
-      {"PUT brdf", {200, 201}},           {"GET brdf", {200, 404}},         {"DELETE brdf", {204, 404}},
-      {"PUT preset", {200, 201, 404}},    {"GET preset", {200, 404}},       {"DELETE preset", {204, 404}},
+      {"PUT brdf", {200, 201}},        {"GET brdf", {200, 404}},   {"DELETE brdf", {204, 404}},
+      {"PUT preset", {200, 201, 404}}, {"GET preset", {200, 404}}, {"DELETE preset", {204, 404}},
       {"GET presets", {200, 404}},
   };
   const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(raceSeconds());
@@ -91,8 +91,8 @@ TEST_F(Races, MixedLibraryAndPresetTrafficFromEightClientsNeverCrashes) {
   for (const auto& [what, n] : counts) summary += "  " + what + ": " + std::to_string(n) + "\n";
   std::printf("%ld requests in %d s\n%s", requests.load(), raceSeconds(), summary.c_str());
   // Each kind of operation really ran, both ways where it can go both ways.
-  for (const char* seen : {"PUT brdf 201", "DELETE brdf 204", "PUT preset 201", "PUT preset 404",
-                           "GET preset 200", "DELETE preset 204"})
+  for (const char* seen :
+       {"PUT brdf 201", "DELETE brdf 204", "PUT preset 201", "PUT preset 404", "GET preset 200", "DELETE preset 204"})
     EXPECT_GT(counts[seen], 0) << seen << " never happened: the race did not race";
 
   // Quiet now: a BRDF deleted and created again starts without presets.

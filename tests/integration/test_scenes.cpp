@@ -90,10 +90,15 @@ TEST_F(Scenes, UploadedHdrHemisphereLightsALambertSphereAsTheIrradianceIntegralS
   ASSERT_FALSE(id.empty());
   const int size = 128;
   for (const char* sampling : {"cosine", "uniform", "brdf", "environment", "mis"}) {
-    json scene = {{"environment", {{"name", id}, {"visible", false}}},
-                  {"objects", json::array({{{"mesh", "sphere"}, {"brdf", "lambert"}, {"params", {{"Kd", {1, 1, 1}}}}}})},
-                  {"render", {{"width", size}, {"height", size}, {"max_samples", 1024}, {"samples_per_frame", 64},
-                              {"sampling", sampling}}}};
+    json scene = {
+        {"environment", {{"name", id}, {"visible", false}}},
+        {"objects", json::array({{{"mesh", "sphere"}, {"brdf", "lambert"}, {"params", {{"Kd", {1, 1, 1}}}}}})},
+        {"render",
+         {{"width", size},
+          {"height", size},
+          {"max_samples", 1024},
+          {"samples_per_frame", 64},
+          {"sampling", sampling}}}};
     auto put = ServerTest::put("/api/sessions/default/scene", scene.dump());
     ASSERT_TRUE(put && put->status == 200) << (put ? put->body : "no response");
     Image img = frame("default", 1024);
@@ -134,11 +139,15 @@ TEST_F(Scenes, UploadedHdrHemisphereLightsALambertSphereAsTheIrradianceIntegralS
 TEST_F(Scenes, ThreeObjectsWithThreeBrdfsAndTexturesRenderAndCountTheirVertices) {
   auto saved = put("/api/brdfs/textured_lambert", kTexturedLambert, "text/plain");
   ASSERT_TRUE(saved && (saved->status == 200 || saved->status == 201)) << (saved ? saved->body : "no response");
-  const json sphere = {{"mesh", "sphere"}, {"brdf", "textured_lambert"}, {"textures", {"checker"}},
-                       {"translate", {-1.1, 0, 0}}, {"scale", {0.5, 0.5, 0.5}}};
+  const json sphere = {{"mesh", "sphere"},
+                       {"brdf", "textured_lambert"},
+                       {"textures", {"checker"}},
+                       {"translate", {-1.1, 0, 0}},
+                       {"scale", {0.5, 0.5, 0.5}}};
   const json cube = {{"mesh", "cube"}, {"brdf", "ggx"}, {"rotate", {20, 30, 0}}, {"scale", {0.4, 0.4, 0.4}}};
-  const json torus = {{"mesh", "torus"}, {"brdf", "ward"}, {"textures", {{{"name", "uv_grid"}, {"srgb", false}}}},
-                      {"translate", {1.1, 0, 0}}, {"rotate", {60, 0, 0}}, {"scale", {0.5, 0.5, 0.5}}};
+  const json torus = {
+      {"mesh", "torus"},          {"brdf", "ward"},       {"textures", {{{"name", "uv_grid"}, {"srgb", false}}}},
+      {"translate", {1.1, 0, 0}}, {"rotate", {60, 0, 0}}, {"scale", {0.5, 0.5, 0.5}}};
   // The UV sphere has (128 + 1) x (64 + 1) vertices (a seam column and pole rows), the cube 24.
   EXPECT_EQ(verticesOf(json::array({sphere})), 129u * 65u);
   EXPECT_EQ(verticesOf(json::array({cube})), 24u);
@@ -169,10 +178,10 @@ TEST_F(Scenes, ThreeObjectsWithThreeBrdfsAndTexturesRenderAndCountTheirVertices)
       for (int x = x0; x < x1; ++x) n += predicate(img.at(x, y, 1)) ? 1 : 0;
     return n;
   };
-  EXPECT_GT(countIn(0, 64, [](float v) { return v > 0.5f && v < 0.7f; }), 50);   // light squares
+  EXPECT_GT(countIn(0, 64, [](float v) { return v > 0.5f && v < 0.7f; }), 50);    // light squares
   EXPECT_GT(countIn(0, 64, [](float v) { return v > 0.01f && v < 0.06f; }), 50);  // dark squares
   EXPECT_EQ(countIn(0, 64, [](float v) { return v > 0.95f; }), 0);
-  EXPECT_GT(countIn(64, 128, [](float v) { return v > 0.05f; }), 100);  // the GGX cube
+  EXPECT_GT(countIn(64, 128, [](float v) { return v > 0.05f; }), 100);   // the GGX cube
   EXPECT_GT(countIn(128, 192, [](float v) { return v > 0.05f; }), 100);  // the Ward torus
 }
 

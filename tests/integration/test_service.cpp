@@ -195,8 +195,8 @@ TEST(Lifecycle, ASecondServerOnAPortInUseExitsInsteadOfSharingIt) {
     int devnull = ::open("/dev/null", O_WRONLY);
     ::dup2(devnull, STDOUT_FILENO);
     ::dup2(devnull, STDERR_FILENO);
-    ::execl(BRDFA_SERVER_BINARY, BRDFA_SERVER_BINARY, "--port", port.c_str(), "--root", BRDFA_SOURCE_DIR,
-            "--data-dir", dataDir, static_cast<char*>(nullptr));
+    ::execl(BRDFA_SERVER_BINARY, BRDFA_SERVER_BINARY, "--port", port.c_str(), "--root", BRDFA_SOURCE_DIR, "--data-dir",
+            dataDir, static_cast<char*>(nullptr));
     ::_exit(127);
   }
   int status = 0;
@@ -274,7 +274,6 @@ TEST(Lifecycle, DefaultSessionHasItsSceneForConcurrentFirstRequests) {
   EXPECT_EQ(server.terminate(), 0);
 }
 
-
 TEST_F(Service, WorkerChannelCountersAccountForEveryFrameRead) {
   constexpr int kSize = 40, kReads = 3;
   // The render worker's channel figures in /metrics, a name{labels} -> value map.
@@ -284,7 +283,8 @@ TEST_F(Service, WorkerChannelCountersAccountForEveryFrameRead) {
     if (!r || r->status != 200) return out;
     std::istringstream lines(r->body);
     for (std::string line; std::getline(lines, line);)
-      if (line.rfind("brdfa_worker_", 0) == 0) out[line.substr(0, line.rfind(' '))] = std::stod(line.substr(line.rfind(' ') + 1));
+      if (line.rfind("brdfa_worker_", 0) == 0)
+        out[line.substr(0, line.rfind(' '))] = std::stod(line.substr(line.rfind(' ') + 1));
     return out;
   };
   const std::string id = createSession(furnaceScene("lambert", json::object(), kSize, 4, 4));
@@ -313,9 +313,11 @@ TEST_F(Service, WorkerChannelCountersAccountForEveryFrameRead) {
   // the window (the reads, the first scrape's tail, the second's head) is counted in both.
   double roundTrips = 0;
   for (const auto& [key, value] : after)
-    if (key.find("part=\"round_trip\"") != std::string::npos) roundTrips += value - (before.count(key) ? before.at(key) : 0);
+    if (key.find("part=\"round_trip\"") != std::string::npos)
+      roundTrips += value - (before.count(key) ? before.at(key) : 0);
   const double inFlight = delta("brdfa_worker_in_flight_seconds_total");
-  EXPECT_NEAR(inFlight, roundTrips, 0.02 + 0.1 * roundTrips) << "in flight " << inFlight << " s, round trips " << roundTrips << " s";
+  EXPECT_NEAR(inFlight, roundTrips, 0.02 + 0.1 * roundTrips)
+      << "in flight " << inFlight << " s, round trips " << roundTrips << " s";
   EXPECT_GE(after.at("brdfa_worker_in_flight_max"), 1);
   EXPECT_EQ(del("/api/sessions/" + id)->status, 204);
 }

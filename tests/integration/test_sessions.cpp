@@ -204,9 +204,10 @@ TEST_F(Sessions, StreamDeliversMultipartPngParts) {
   for (const std::string& png : reader.pngs) EXPECT_EQ(png.substr(0, 8), std::string("\x89PNG\r\n\x1a\n", 8));
   // Only newer frames are sent: more samples, or the same count with more of a pass shown (a
   // slow pass, as under the sanitizers, is shown partway at the stream's frame interval).
-  EXPECT_TRUE(reader.samples[1] > reader.samples[0] || (reader.samples[1] == reader.samples[0] && reader.pngs[1] != reader.pngs[0]))
-      << "samples " << reader.samples[0] << " then " << reader.samples[1] << ", the same image: "
-      << (reader.pngs[1] == reader.pngs[0]);
+  EXPECT_TRUE(reader.samples[1] > reader.samples[0] ||
+              (reader.samples[1] == reader.samples[0] && reader.pngs[1] != reader.pngs[0]))
+      << "samples " << reader.samples[0] << " then " << reader.samples[1]
+      << ", the same image: " << (reader.pngs[1] == reader.pngs[0]);
 
   // After a scene change a new client gets only frames of the new scene (the old one had far
   // more than 8 spp), ending promptly with the converged frame (Kd changes, so accumulation
@@ -290,7 +291,8 @@ TEST_F(Sessions, StreamSendsHalfSizePreviewsUntilFourSamplesAndTheConvergedFrame
 std::vector<std::array<int, 3>> pngCentreBlock(const std::string& body, int& width) {
   int h = 0, n = 0;
   width = 0;
-  stbi_uc* px = stbi_load_from_memory(reinterpret_cast<const stbi_uc*>(body.data()), int(body.size()), &width, &h, &n, 4);
+  stbi_uc* px =
+      stbi_load_from_memory(reinterpret_cast<const stbi_uc*>(body.data()), int(body.size()), &width, &h, &n, 4);
   if (!px) return {};
   std::vector<std::array<int, 3>> block;
   for (int y = h / 2 - 16; y < h / 2 + 16; ++y)

@@ -59,7 +59,9 @@ TEST_F(SessionDirectoryTest, IgnoresItsOwnFileStaleFilesAndForgedEntries) {
   // Stopped publishing longer ago than kStaleAfter: a crashed replica.
   write("r2.json", {{"replica", "r2"}, {"updated_unix_ms", now - 11'000}, {"sessions", {entry("r2.old", "alice")}}});
   // An id another replica's tag starts is not this file's to publish: a balancer would route it there.
-  write("r3.json", {{"replica", "r3"}, {"updated_unix_ms", now}, {"sessions", {entry("r1.forged", "bob"), entry("r3.ok", "bob")}}});
+  write(
+      "r3.json",
+      {{"replica", "r3"}, {"updated_unix_ms", now}, {"sessions", {entry("r1.forged", "bob"), entry("r3.ok", "bob")}}});
   // A file that names another replica than its own name.
   write("r4.json", {{"replica", "r5"}, {"updated_unix_ms", now}, {"sessions", {entry("r5.x", "bob")}}});
   write("r6.json", json::array());  // not an object

@@ -14,8 +14,9 @@ namespace {
 
 namespace fs = std::filesystem;
 
-const char* kSource = "analytic\n::begin parameters\ncolor Kd 1 1 1\n::end parameters\n::begin shader\n"
-                      "vec3 BRDF(vec3 L, vec3 V, vec3 N, vec3 X, vec3 Y) { return Kd / 3.14159265; }\n::end shader\n";
+const char* kSource =
+    "analytic\n::begin parameters\ncolor Kd 1 1 1\n::end parameters\n::begin shader\n"
+    "vec3 BRDF(vec3 L, vec3 V, vec3 N, vec3 X, vec3 Y) { return Kd / 3.14159265; }\n::end shader\n";
 
 struct TempFolder {
   fs::path path = fs::temp_directory_path() / ("brdfa-shared-" + std::to_string(::getpid()) + "-" +

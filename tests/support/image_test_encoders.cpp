@@ -187,8 +187,10 @@ std::string encodeExrWithOpenExr(int width, int height, const std::vector<float>
   auto plane = [&](auto value) {
     std::vector<char>& bytes = planes.emplace_back(pixels * size);
     for (size_t i = 0; i < pixels; ++i) {
-      if (options.half) reinterpret_cast<half*>(bytes.data())[i] = half(value(i));
-      else reinterpret_cast<float*>(bytes.data())[i] = value(i);
+      if (options.half)
+        reinterpret_cast<half*>(bytes.data())[i] = half(value(i));
+      else
+        reinterpret_cast<float*>(bytes.data())[i] = value(i);
     }
     return Imf::Slice(type, bytes.data(), size, size * width);
   };

@@ -25,11 +25,11 @@ std::string encodeExr(int width, int height, const std::vector<float>& rgb, bool
 struct OpenExrOptions {
   // An Imf::Compression: 0 NONE, 1 RLE, 2 ZIPS, 3 ZIP, 4 PIZ, 5 PXR24, 6 B44, 7 B44A, 8 DWAA, 9 DWAB.
   int compression = 9;
-  bool half = true;     // HALF channels, else FLOAT
-  bool tiled = false;   // 16 x 16 tiles, one level, else scanlines
-  bool grey = false;    // one Y channel with the green values, else R, G, B and an A of 0.5
-  int parts = 1;        // 2: a multi-part file, the image in part 0 and a one-pixel "Z" part after it
-  bool deep = false;    // a deep scanline image, one sample per pixel (single part, not tiled)
+  bool half = true;    // HALF channels, else FLOAT
+  bool tiled = false;  // 16 x 16 tiles, one level, else scanlines
+  bool grey = false;   // one Y channel with the green values, else R, G, B and an A of 0.5
+  int parts = 1;       // 2: a multi-part file, the image in part 0 and a one-pixel "Z" part after it
+  bool deep = false;   // a deep scanline image, one sample per pixel (single part, not tiled)
 };
 
 // OpenEXR (Imf::OutputFile and its tiled, multi-part and deep kin, into an in-memory

@@ -30,8 +30,7 @@ class ServerProcess {
   // Starts `binary` --port 0 --root `root` --data-dir <fresh temp dir> plus `extraArgs`, waits
   // for the listening line and a healthy /api/health. Returns "" on success, else why it failed
   // (with the server log).
-  std::string start(const std::string& binary, const std::string& root,
-                    const std::vector<std::string>& extraArgs = {});
+  std::string start(const std::string& binary, const std::string& root, const std::vector<std::string>& extraArgs = {});
 
   // SIGTERM, then waits up to `timeout` for exit. Returns the exit code; -1 if it died by a
   // signal or had to be killed after the timeout.

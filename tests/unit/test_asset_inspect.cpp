@@ -46,8 +46,8 @@ TEST(AssetSniff, ImageMagicNumbers) {
 }
 
 TEST(AssetSniff, ObjByItsFirstStatement) {
-  for (const char* text : {"v 0 0 0\n", "vn 0 1 0\n", "vt 0.5 0.5\n", "f 1 2 3\n", "o cube\n", "g group\n",
-                           "s off\n", "l 1 2\n", "p 1\n", "mtllib cube.mtl\n", "usemtl red\n", "v\t1\t2\t3\r\n",
+  for (const char* text : {"v 0 0 0\n", "vn 0 1 0\n", "vt 0.5 0.5\n", "f 1 2 3\n", "o cube\n", "g group\n", "s off\n",
+                           "l 1 2\n", "p 1\n", "mtllib cube.mtl\n", "usemtl red\n", "v\t1\t2\t3\r\n",
                            "# Blender export\n\n   \n# more\n  v 1 2 3\n", "\r\n\r\nv 1 2 3"})
     EXPECT_EQ(sniffAssetFormat(text), AssetFormat::Obj) << text;
   for (const char* text : {"hello world\n", "vertex 1 2 3\n", "v1 2 3\n", "# only a comment\n", "\n\n", "f\n",
@@ -96,10 +96,12 @@ TEST(AssetInspect, EnvironmentsReportLayoutAndSourceSize) {
 }
 
 TEST(AssetInspect, MislabelledFilesNameWhatTheyAre) {
-  expectInvalid(inspectAsset(png(), AssetKind::Mesh, AssetLimits{}), "mislabelled: the file is a PNG image, not a mesh (OBJ)");
+  expectInvalid(inspectAsset(png(), AssetKind::Mesh, AssetLimits{}),
+                "mislabelled: the file is a PNG image, not a mesh (OBJ)");
   expectInvalid(inspectAsset(kQuadObj, AssetKind::Texture, AssetLimits{}),
                 "mislabelled: the file is an OBJ mesh, not a texture (PNG or JPEG)");
-  expectInvalid(inspectAsset(hdr(), AssetKind::Texture, AssetLimits{}), "the file is a Radiance HDR image, not a texture");
+  expectInvalid(inspectAsset(hdr(), AssetKind::Texture, AssetLimits{}),
+                "the file is a Radiance HDR image, not a texture");
   expectInvalid(inspectAsset(exr(), AssetKind::Texture, AssetLimits{}), "the file is an OpenEXR image, not a texture");
   expectInvalid(inspectAsset(kQuadObj, AssetKind::Environment, AssetLimits{}), "not an environment");
   expectInvalid(inspectAsset(jpeg(), AssetKind::Mesh, AssetLimits{}), "a JPEG image, not a mesh");

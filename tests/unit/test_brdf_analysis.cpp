@@ -16,8 +16,10 @@ constexpr double kPi = 3.14159265358979323846;
 class BrdfAnalysis : public DeviceTest {
  protected:
   static BrdfDefinition file(const std::string& body) {
-    auto def = parseBrdf("analytic\n::begin parameters\nfloat k 0 1 0.5\n::end parameters\n::begin shader\n"
-                         "vec3 BRDF(vec3 L, vec3 V, vec3 N, vec3 X, vec3 Y) {\n" + body + "\n}\n::end shader\n");
+    auto def = parseBrdf(
+        "analytic\n::begin parameters\nfloat k 0 1 0.5\n::end parameters\n::begin shader\n"
+        "vec3 BRDF(vec3 L, vec3 V, vec3 N, vec3 X, vec3 Y) {\n" +
+        body + "\n}\n::end shader\n");
     EXPECT_TRUE(def.ok());
     return def.value();
   }
@@ -63,7 +65,8 @@ TEST_F(BrdfAnalysis, MixtureEstimatorIsUnbiasedForFlatAndSharpLobes) {
 // evaluateBrdf returns BRDF() at the pairs, per setting.
 TEST_F(BrdfAnalysis, EvaluatesAtThePairsPerSetting) {
   const BrdfDefinition lin = file("return vec3(k, dot(L, V), L.z + V.z);");
-  std::vector<DirectionPair> pairs = {{{0, 0, 1}, {0, 0, 1}}, {{1, 0, 0}, {0, 1, 0}}, {{0.6f, 0, 0.8f}, {0, 0.8f, 0.6f}}};
+  std::vector<DirectionPair> pairs = {
+      {{0, 0, 1}, {0, 0, 1}}, {{1, 0, 0}, {0, 1, 0}}, {{0.6f, 0, 0.8f}, {0, 0.8f, 0.6f}}};
   auto r = renderer_->evaluateBrdf(lin, {{{"k", {0.25f, 0, 0}}}, {{"k", {0.75f, 0, 0}}}}, pairs);
   ASSERT_TRUE(r.ok()) << r.error().message;
   ASSERT_EQ(r.value().size(), 6u);

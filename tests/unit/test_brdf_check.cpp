@@ -37,7 +37,8 @@ class BrdfCheck : public ::testing::Test {
   static std::string withBody(const std::string& body) {
     return "analytic\n::begin parameters\nfloat k 0 1 0.5\n::end parameters\n::begin shader\n"
            "const float PI = 3.14159265358979323846;\n"
-           "vec3 BRDF(vec3 L, vec3 V, vec3 N, vec3 X, vec3 Y) {\n" + body + "\n}\n::end shader\n";
+           "vec3 BRDF(vec3 L, vec3 V, vec3 N, vec3 X, vec3 Y) {\n" +
+           body + "\n}\n::end shader\n";
   }
 
   static inline std::shared_ptr<Renderer> renderer_;
@@ -137,7 +138,7 @@ TEST_F(BrdfCheck, CatchesNonReciprocity) {
 
 TEST_F(BrdfCheck, CatchesEnergyGain) {
   BrdfCheckReport r = check(withBody("return vec3((1.0 + k) / PI);"));  // albedo 1 + k
-  EXPECT_NEAR(r.maxAlbedo, 2.0, 4.0 * r.maxAlbedoStdError + 1e-4);  // at k = max
+  EXPECT_NEAR(r.maxAlbedo, 2.0, 4.0 * r.maxAlbedoStdError + 1e-4);      // at k = max
   EXPECT_GT(r.albedoAboveOne, 0u);
   EXPECT_NE(r.worstAlbedo.find(" +- "), std::string::npos) << r.worstAlbedo;
   EXPECT_NE(r.worstAlbedo.find("(standard error) at V (theta"), std::string::npos) << r.worstAlbedo;
@@ -166,7 +167,8 @@ TEST_F(BrdfCheck, OkMeansEveryClaimHolds) {
   EXPECT_FALSE(gain.ok());
   EXPECT_EQ(gain.claims[1].name, "energy-conservation");
   EXPECT_FALSE(gain.claims[1].holds);
-  EXPECT_NE(gain.claims[1].measured.find("k = 1 (others at their defaults)"), std::string::npos) << gain.claims[1].measured;
+  EXPECT_NE(gain.claims[1].measured.find("k = 1 (others at their defaults)"), std::string::npos)
+      << gain.claims[1].measured;
   EXPECT_NEAR(gain.maxAlbedo, 1.5, 4.0 * gain.maxAlbedoStdError + 1e-4);
   // NaN fails whatever is claimed.
   BrdfCheckReport nan = check("# claims: none\n" + withBody("return vec3(sqrt(dot(L, V) - 1.0 - k));"));

@@ -9,18 +9,18 @@ namespace brdfa {
 namespace {
 
 const char* kLambert =
-    "analytic\n"                                         // 1
-    "# a comment line\n"                                 // 2
-    "::begin parameters\n"                               // 3
-    "float roughness 0.001 1 0.3     # name min max\n"   // 4
-    "color Kd 0.8 0.7 .6            # rgb 0..1\n"        // 5
-    "bool  isotropic 1               # 0|1\n"            // 6
-    "\n"                                                 // 7
-    "::end parameters\n"                                 // 8
-    "::begin shader\n"                                   // 9
-    "const float PI = 3.14159265358979323846;\n"         // 10
+    "analytic\n"                                                               // 1
+    "# a comment line\n"                                                       // 2
+    "::begin parameters\n"                                                     // 3
+    "float roughness 0.001 1 0.3     # name min max\n"                         // 4
+    "color Kd 0.8 0.7 .6            # rgb 0..1\n"                              // 5
+    "bool  isotropic 1               # 0|1\n"                                  // 6
+    "\n"                                                                       // 7
+    "::end parameters\n"                                                       // 8
+    "::begin shader\n"                                                         // 9
+    "const float PI = 3.14159265358979323846;\n"                               // 10
     "vec3 BRDF(vec3 L, vec3 V, vec3 N, vec3 X, vec3 Y) { return Kd / PI; }\n"  // 11
-    "::end shader\n";                                    // 12
+    "::end shader\n";                                                          // 12
 
 // Builds a file whose parameter section holds `paramLine` on line 3.
 std::string withParam(const std::string& paramLine) {
@@ -86,7 +86,8 @@ TEST(BrdfParser, ClaimsLine) {
   EXPECT_FALSE(none->claims.declared);
   EXPECT_FALSE(none->claims.reciprocity);
 
-  Result<BrdfDefinition> r = parseBrdf(std::string("# claims: reciprocity,energy-conservation  non-negativity\n") + kLambert);
+  Result<BrdfDefinition> r =
+      parseBrdf(std::string("# claims: reciprocity,energy-conservation  non-negativity\n") + kLambert);
   ASSERT_TRUE(r.ok()) << r.error().message;
   EXPECT_TRUE(r->claims.declared);
   EXPECT_EQ(r->claims.line, 1);
@@ -202,8 +203,7 @@ TEST(BrdfParser, ReservedNames) {
   expectErrorAt(withParam("float a__b 0 1 0"), 3, "__");
   expectErrorAt(withParam("float 9lives 0 1 0"), 3, "identifier");
   expectErrorAt(withParam("float k-d 0 1 0"), 3, "identifier");
-  for (const char* name :
-       {"BRDF", "sampleBRDF", "texCoord", "iTexture0", "iTexture3", "BrdfParams"})
+  for (const char* name : {"BRDF", "sampleBRDF", "texCoord", "iTexture0", "iTexture3", "BrdfParams"})
     expectErrorAt(withParam(std::string("float ") + name + " 0 1 0"), 3, "renderer");
   // Near misses are fine.
   EXPECT_TRUE(parseBrdf(withParam("float iTexture4 0 1 0")).ok());
@@ -211,28 +211,23 @@ TEST(BrdfParser, ReservedNames) {
 }
 
 TEST(BrdfParser, MissingShaderSection) {
-  expectErrorAt("analytic\n::begin parameters\nfloat a 0 1 0\n::end parameters\n", 0,
-                "no '::begin shader'");
+  expectErrorAt("analytic\n::begin parameters\nfloat a 0 1 0\n::end parameters\n", 0, "no '::begin shader'");
 }
 
 TEST(BrdfParser, ShaderWithoutBrdfFunction) {
-  expectErrorAt("analytic\n::begin shader\nfloat f() { return 1.0; }\n::end shader\n", 2,
-                "does not define");
+  expectErrorAt("analytic\n::begin shader\nfloat f() { return 1.0; }\n::end shader\n", 2, "does not define");
 }
 
 TEST(BrdfParser, BrdfEntryPointDetection) {
-  auto shaderOnly = [](const std::string& glsl) {
-    return "::begin shader\n" + glsl + "\n::end shader\n";
-  };
+  auto shaderOnly = [](const std::string& glsl) { return "::begin shader\n" + glsl + "\n::end shader\n"; };
   EXPECT_TRUE(parseBrdf(shaderOnly("vec3\nBRDF (vec3 L, vec3 V, vec3 N, vec3 X, vec3 Y)\n{ return "
                                    "vec3(1); }"))
                   .ok());
-  expectErrorAt(shaderOnly("vec3 BRDF2(vec3 L, vec3 V, vec3 N, vec3 X, vec3 Y) { return vec3(1); }"),
-                1, "does not define");
-  expectErrorAt(shaderOnly("float BRDF(vec3 L, vec3 V, vec3 N, vec3 X, vec3 Y) { return 1.0; }"),
-                1, "does not define");
-  expectErrorAt(shaderOnly("myvec3 BRDF(vec3 L, vec3 V, vec3 N, vec3 X, vec3 Y) { return 1.0; }"),
-                1, "does not define");
+  expectErrorAt(shaderOnly("vec3 BRDF2(vec3 L, vec3 V, vec3 N, vec3 X, vec3 Y) { return vec3(1); }"), 1,
+                "does not define");
+  expectErrorAt(shaderOnly("float BRDF(vec3 L, vec3 V, vec3 N, vec3 X, vec3 Y) { return 1.0; }"), 1, "does not define");
+  expectErrorAt(shaderOnly("myvec3 BRDF(vec3 L, vec3 V, vec3 N, vec3 X, vec3 Y) { return 1.0; }"), 1,
+                "does not define");
   expectErrorAt(shaderOnly(""), 1, "does not define");
 }
 
@@ -268,7 +263,7 @@ TEST(BrdfParser, LegacyRenderFunctionIsDetected) {
 
 TEST(BrdfParser, IsFuncSectionIsIgnoredWithAWarning) {
   std::string text = std::string(kLambert) +
-                     "::begin isFunc\n"                  // 13
+                     "::begin isFunc\n"  // 13
                      "this is not even GLSL\n"
                      "::end isFunc\n";
   Result<BrdfDefinition> r = parseBrdf(text);
@@ -282,9 +277,9 @@ TEST(BrdfParser, IsFuncSectionIsIgnoredWithAWarning) {
 
 TEST(BrdfParser, SampleSection) {
   std::string text = std::string(kLambert) +
-                     "\n"                                                          // 13
-                     "::begin sample\n"                                            // 14
-                     "vec3 sampleBRDF(vec2 u, vec3 V, vec3 N, vec3 X, vec3 Y,\n"   // 15
+                     "\n"                                                         // 13
+                     "::begin sample\n"                                           // 14
+                     "vec3 sampleBRDF(vec2 u, vec3 V, vec3 N, vec3 X, vec3 Y,\n"  // 15
                      "                out vec3 L, out float pdf) { L = N; pdf = 1.0; return vec3(1); }\n"
                      "::end sample\n";
   Result<BrdfDefinition> r = parseBrdf(text);
@@ -293,8 +288,7 @@ TEST(BrdfParser, SampleSection) {
   EXPECT_EQ(r->sampleFirstLine, 15);
   EXPECT_EQ(r->sampleShader.rfind("vec3 sampleBRDF(", 0), 0u);
 
-  expectErrorAt(std::string(kLambert) + "::begin sample\nfloat f() { return 1.0; }\n::end sample\n",
-                13, "sampleBRDF");
+  expectErrorAt(std::string(kLambert) + "::begin sample\nfloat f() { return 1.0; }\n::end sample\n", 13, "sampleBRDF");
 }
 
 TEST(BrdfParser, SectionStructureErrors) {
@@ -310,8 +304,8 @@ TEST(BrdfParser, SectionStructureErrors) {
       "::end parameters\n",
       3, "does not close");
   // An unterminated shader section at the end of the file is accepted with a warning.
-  Result<BrdfDefinition> r = parseBrdf(
-      "::begin shader\nvec3 BRDF(vec3 L, vec3 V, vec3 N, vec3 X, vec3 Y) { return vec3(1); }");
+  Result<BrdfDefinition> r =
+      parseBrdf("::begin shader\nvec3 BRDF(vec3 L, vec3 V, vec3 N, vec3 X, vec3 Y) { return vec3(1); }");
   ASSERT_TRUE(r.ok()) << r.error().message;
   ASSERT_EQ(r->warnings.size(), 1u);
 }

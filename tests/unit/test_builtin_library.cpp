@@ -39,8 +39,7 @@ using Params = std::map<std::string, Vec3>;
 class BuiltinLibrary : public DeviceTest {
  protected:
   // Environment furnace (L_env = 1), hidden background, a sphere filling the view.
-  static Frame furnace(std::shared_ptr<const BrdfDefinition> brdf, const Params& params, int size,
-                       int spp) {
+  static Frame furnace(std::shared_ptr<const BrdfDefinition> brdf, const Params& params, int size, int spp) {
     Scene s;
     s.environment.name = "furnace";
     s.environment.visible = false;
@@ -76,19 +75,39 @@ class BuiltinLibrary : public DeviceTest {
         for (int c = 0; c < 3; ++c, ++count) sum += f.rgba32f[4 * (y * f.width + x) + c];
     return count ? sum / count : 0;
   }
-
 };
 
 // Every model that must have a file (the library is at least this).
 TEST_F(BuiltinLibrary, HasEveryModel) {
   const auto names = libraryNames();
   const std::set<std::string> have(names.begin(), names.end());
-  for (const char* n :
-       {"lambert", "ggx", "oren_nayar", "disney_diffuse", "phong", "blinn_phong", "phong_normalized",
-        "blinn_phong_normalized", "lafortune", "ward", "ashikhmin_shirley", "torrance_sparrow",
-        "cook_torrance", "disney", "D_beckmann", "D_ggx", "D_blinn", "D_gaussian", "G_implicit",
-        "G_cook_torrance", "G_torrance_sparrow", "G_smith_ggx", "G_smith_beckmann",
-        "G_schlick_ggx", "F_schlick", "F_dielectric", "F_conductor"})
+  for (const char* n : {"lambert",
+                        "ggx",
+                        "oren_nayar",
+                        "disney_diffuse",
+                        "phong",
+                        "blinn_phong",
+                        "phong_normalized",
+                        "blinn_phong_normalized",
+                        "lafortune",
+                        "ward",
+                        "ashikhmin_shirley",
+                        "torrance_sparrow",
+                        "cook_torrance",
+                        "disney",
+                        "D_beckmann",
+                        "D_ggx",
+                        "D_blinn",
+                        "D_gaussian",
+                        "G_implicit",
+                        "G_cook_torrance",
+                        "G_torrance_sparrow",
+                        "G_smith_ggx",
+                        "G_smith_beckmann",
+                        "G_schlick_ggx",
+                        "F_schlick",
+                        "F_dielectric",
+                        "F_conductor"})
     EXPECT_TRUE(have.count(n)) << n;
   for (const char* n : {"phong_normalized", "blinn_phong_normalized", "ward", "cook_torrance"}) {
     auto def = load(n);
@@ -123,7 +142,10 @@ TEST_F(BuiltinLibrary, WhiteLambertIsExactlyOne) {
 // Models claiming energy conservation, at defaults and extreme settings (the white furnace
 // shows the directional albedo). Cosine sampling, so narrow lobes are noisy: more samples.
 TEST_F(BuiltinLibrary, EnergyConservingModelsReflectAtMostOne) {
-  struct Case { const char* name; Params params; };
+  struct Case {
+    const char* name;
+    Params params;
+  };
   const std::vector<Case> cases = {
       {"lambert", {}},
       {"ggx", {{"roughness", {1, 0, 0}}, {"F0", {1, 1, 1}}}},
@@ -178,8 +200,8 @@ TEST_F(BuiltinLibrary, NumericChecksAreCleanAndReciprocalModelsAreSymmetric) {
     SCOPED_TRACE(name);
     auto report = renderer_->checkBrdf(*load(name));
     ASSERT_TRUE(report.ok()) << report.error().message;
-    EXPECT_TRUE(report->ok()) << "nan " << report->nanCount << " inf " << report->infCount
-                              << " negative " << report->negativeCount;
+    EXPECT_TRUE(report->ok()) << "nan " << report->nanCount << " inf " << report->infCount << " negative "
+                              << report->negativeCount;
     if (name != "phong") {
       EXPECT_LT(report->maxReciprocityError, 1e-4);
     }

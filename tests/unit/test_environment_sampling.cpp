@@ -83,8 +83,8 @@ TEST(EnvironmentDistribution, DensityFollowsLuminanceAndHasAFloor) {
   for (const float* d : {up, down}) EXPECT_NEAR(black.pdf(d) * 4.0 * kPi, 1.0, 0.02);
   EXPECT_NEAR(black.pdf(sun) * 4.0 * kPi, 1.0, 0.10);
   // Every direction is reachable: the floor keeps a black half non-zero.
-  EnvironmentDistribution half = buildEnvironmentDistribution(
-      cubeOf(16, [](const float* d) { return d[1] > 0 ? 1.0 : 0.0; }));
+  EnvironmentDistribution half =
+      buildEnvironmentDistribution(cubeOf(16, [](const float* d) { return d[1] > 0 ? 1.0 : 0.0; }));
   EXPECT_GT(half.pdf(down), 0.0);
   EXPECT_LT(half.pdf(down), 1e-3 * half.pdf(up));
   // The effective density (integral of pdf^2) is 1/(4 pi) for a uniform map and larger when

@@ -163,8 +163,8 @@ glm::vec3 radianceToward(const EnvironmentData& env, glm::vec3 direction) {
 TEST(EnvironmentBuiltins, StudioHasThreeSharpLightsOverADimSurround) {
   auto env = makeBuiltinEnvironment("studio");
   ASSERT_TRUE(env.ok());
-  EXPECT_NEAR(radianceToward(*env, {0, -1, 0}).g, 0.03f, 1e-4f);   // floor: surround
-  EXPECT_NEAR(radianceToward(*env, {0, 0, -1}).g, 0.03f, 1e-4f);   // straight ahead: surround
+  EXPECT_NEAR(radianceToward(*env, {0, -1, 0}).g, 0.03f, 1e-4f);  // floor: surround
+  EXPECT_NEAR(radianceToward(*env, {0, 0, -1}).g, 0.03f, 1e-4f);  // straight ahead: surround
   glm::vec3 key = radianceToward(*env, {-0.55f, 0.55f, 0.63f});
   glm::vec3 fill = radianceToward(*env, {0.85f, 0.10f, 0.50f});
   glm::vec3 rim = radianceToward(*env, {0.15f, 0.45f, -0.88f});
@@ -191,8 +191,8 @@ TEST(EnvironmentBuiltins, CornellRoomWallsAndCeilingLight) {
   ASSERT_TRUE(env.ok());
   glm::vec3 left = radianceToward(*env, {-1, 0, 0}), right = radianceToward(*env, {1, 0, 0});
   glm::vec3 back = radianceToward(*env, {0, 0, -1}), floor = radianceToward(*env, {0, -1, 0});
-  EXPECT_GT(left.r, 3 * left.g);   // red wall on the default camera's left (-X)
-  EXPECT_GT(right.g, 2 * right.r);  // green wall on its right (+X)
+  EXPECT_GT(left.r, 3 * left.g);        // red wall on the default camera's left (-X)
+  EXPECT_GT(right.g, 2 * right.r);      // green wall on its right (+X)
   EXPECT_NEAR(back.r, floor.r, 1e-3f);  // white walls all alike
   EXPECT_NEAR(back.r, 0.725f * 0.09f * 17.0f / kPi, 2e-3f);
   glm::vec3 light = radianceToward(*env, {0, 1, 0});
@@ -259,9 +259,8 @@ TEST(EnvironmentEquirect, UpperHemisphereGivesTheExpectedIrradiance) {
 // Values that RGBE (8-bit mantissas under a shared exponent) and half floats both hold
 // exactly: multiples of 1/32 below 8.
 std::vector<float> exactlyRepresentablePattern(int w, int h) {
-  return equirectImage(w, h, [](int x, int y) {
-    return glm::vec3(float(x % 16) / 8, float(y % 32) / 16, float((x + y) % 8) / 4);
-  });
+  return equirectImage(
+      w, h, [](int x, int y) { return glm::vec3(float(x % 16) / 8, float(y % 32) / 16, float((x + y) % 8) / 4); });
 }
 
 TEST(EnvironmentEquirect, ExrGivesTheSameCubeAsHdr) {
@@ -441,9 +440,8 @@ TEST(EnvironmentEquirect, BrightSpotLandsInTheRightTexel) {
 
 TEST(EnvironmentEquirect, NegativeValuesAreClampedAndHugeOnesKept) {
   const int w = 64, h = 32;
-  auto rgb = equirectImage(w, h, [](int x, int y) {
-    return x == 10 && y == 10 ? glm::vec3(1e6f) : glm::vec3(x == 20 ? -5.0f : 0.5f);
-  });
+  auto rgb = equirectImage(
+      w, h, [](int x, int y) { return x == 10 && y == 10 ? glm::vec3(1e6f) : glm::vec3(x == 20 ? -5.0f : 0.5f); });
   EnvironmentData fromExr = decodeOk(encodeExr(w, h, rgb, false));
   expectFiniteAndInRange(fromExr, 0.0f, 1e6f);
   EXPECT_GT(brightestTexel(fromExr).direction.y, 0.0f);
@@ -471,7 +469,8 @@ TEST(EnvironmentEquirect, NonFiniteExrValuesAreRefused) {
   const int w = 16, h = 8;
   for (float bad : {std::numeric_limits<float>::quiet_NaN(), std::numeric_limits<float>::infinity()})
     for (bool half : {false, true}) {
-      auto rgb = equirectImage(w, h, [&](int x, int y) { return glm::vec3(0.5f, x == 3 && y == 2 ? bad : 0.5f, 0.5f); });
+      auto rgb =
+          equirectImage(w, h, [&](int x, int y) { return glm::vec3(0.5f, x == 3 && y == 2 ? bad : 0.5f, 0.5f); });
       auto env = decode(encodeExr(w, h, rgb, half));
       expectInvalid(env, "non-finite");
       expectInvalid(env, "(3, 2)");
@@ -517,9 +516,12 @@ TEST(EnvironmentEquirect, TruncatedAndCorruptHdrAreRefused) {
 }
 
 std::string smoothExr(int w, int h) {
-  return encodeExr(w, h, equirectImage(w, h, [&](int x, int y) {
-                     return glm::vec3(0.2f + float(x) / w, 0.5f + 0.3f * std::sin(float(y) / 4), 1.0f);
-                   }), true);
+  return encodeExr(w, h,
+                   equirectImage(w, h,
+                                 [&](int x, int y) {
+                                   return glm::vec3(0.2f + float(x) / w, 0.5f + 0.3f * std::sin(float(y) / 4), 1.0f);
+                                 }),
+                   true);
 }
 
 // Overwrites 64 bytes at `at` (a fraction of the size) with garbage.
@@ -556,9 +558,8 @@ TEST(EnvironmentEquirect, TruncatedAndCorruptExrAreRefused) {
 // unit tests also run under valgrind).
 TEST(EnvironmentEquirect, DamagedExrOfEveryKindIsRefusedSafely) {
   const int w = 64, h = 32;
-  auto rgb = equirectImage(w, h, [&](int x, int y) {
-    return glm::vec3(0.2f + float(x) / w, 0.5f, 1.0f + float(y) / h);
-  });
+  auto rgb =
+      equirectImage(w, h, [&](int x, int y) { return glm::vec3(0.2f + float(x) / w, 0.5f, 1.0f + float(y) / h); });
   const OpenExrOptions kinds[] = {{.compression = 9},
                                   {.compression = 8, .tiled = true},
                                   {.compression = 4, .half = false},

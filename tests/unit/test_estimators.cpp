@@ -164,9 +164,9 @@ TEST_F(Estimators, SphereSeenFromEverySideShowsItsNormalsInTheHalfWhiteSky) {
     const char* name;
     float yaw, pitch;  // the camera looks along this, from 3 units away, at the sphere
   };
-  const Side sides[] = {{"+z", 0, 0},        {"-z", 180, 0},      {"near -z", 179.9f, 0.05f}, {"+x", 90, 0},
-                        {"-x", -90, 0},      {"above", 0, -89},   {"below", 180, 89},         {"arbitrary", 137, -23},
-                        {"near +z", 0.05f, 0.1f}};
+  const Side sides[] = {{"+z", 0, 0},       {"-z", 180, 0},          {"near -z", 179.9f, 0.05f},
+                        {"+x", 90, 0},      {"-x", -90, 0},          {"above", 0, -89},
+                        {"below", 180, 89}, {"arbitrary", 137, -23}, {"near +z", 0.05f, 0.1f}};
   constexpr int kSize = 64, kBlock = 8;
   for (const Side& side : sides) {
     Scene s = sphereScene(builtin("lambert"), "half_white", kSize);
@@ -187,8 +187,9 @@ TEST_F(Estimators, SphereSeenFromEverySideShowsItsNormalsInTheHalfWhiteSky) {
     for (int y = 0; y < kSize; ++y)
       for (int x = 0; x < kSize; ++x) {
         const glm::dvec2 ndc(2.0 * (x + 0.5) / kSize - 1.0, 1.0 - 2.0 * (y + 0.5) / kSize);
-        const glm::dvec3 dir = glm::normalize(glm::dvec3(cam.forward) + ndc.x * cam.tanHalfFov * cam.aspect * glm::dvec3(cam.right) +
-                                              ndc.y * cam.tanHalfFov * glm::dvec3(cam.up));
+        const glm::dvec3 dir =
+            glm::normalize(glm::dvec3(cam.forward) + ndc.x * cam.tanHalfFov * cam.aspect * glm::dvec3(cam.right) +
+                           ndc.y * cam.tanHalfFov * glm::dvec3(cam.up));
         const glm::dvec3 origin(cam.position);
         const double b = glm::dot(origin, dir), c = glm::dot(origin, origin) - 1.0, disc = b * b - c;
         if (disc < 0.2) continue;  // outside, or within ~0.1 of the silhouette
@@ -255,8 +256,8 @@ TEST_F(Estimators, HalfDegreeSunFarAboveHalfRangeKeepsItsEnergy) {
       const int n = 16;
       for (int j = 0; j < n; ++j)
         for (int i = 0; i < n; ++i)
-          inside += glm::dot(equirectDirection((x + (i + 0.5) / n) / w, (y + (j + 0.5) / n) / h), sunDir) >=
-                    std::cos(radius);
+          inside +=
+              glm::dot(equirectDirection((x + (i + 0.5) / n) / w, (y + (j + 0.5) / n) / h), sunDir) >= std::cos(radius);
       const double v = double(sun) * inside / (n * n);
       const double theta = (y + 0.5) / h * kPi;
       energy += v * (2.0 * kPi / w) * (kPi / h) * std::sin(theta);
@@ -378,7 +379,8 @@ TEST_F(Estimators, EstimatorAndWarningsNameWhatRuns) {
   ASSERT_NE(at, std::string::npos);
   noPdf.sampleShader.replace(at, std::string("float pdfBRDF(").size(), "float ggxPdf(");
   size_t call;
-  while ((call = noPdf.sampleShader.find("pdfBRDF(")) != std::string::npos) noPdf.sampleShader.replace(call, 8, "ggxPdf(");
+  while ((call = noPdf.sampleShader.find("pdfBRDF(")) != std::string::npos)
+    noPdf.sampleShader.replace(call, 8, "ggxPdf(");
   s.objects[0].brdf = std::make_shared<BrdfDefinition>(noPdf);
   s.objects[0].brdfName = "ggx_nopdf";
   ASSERT_TRUE(view->setScene(s).ok());
@@ -388,7 +390,8 @@ TEST_F(Estimators, EstimatorAndWarningsNameWhatRuns) {
   auto compiled = renderer_->compileBrdf(noPdf);
   ASSERT_TRUE(compiled.ok());
   bool warned = false;
-  for (const Diagnostic& d : compiled->warnings) warned = warned || d.message.find("multiple importance") != std::string::npos;
+  for (const Diagnostic& d : compiled->warnings)
+    warned = warned || d.message.find("multiple importance") != std::string::npos;
   EXPECT_TRUE(warned);
 }
 
@@ -422,14 +425,17 @@ TEST_F(Estimators, TargetErrorStopsRenderingAndIsReportedApartFromMaxSamples) {
 
 TEST_F(Estimators, EnvironmentSamplerDrawsWhatItsPdfSays) {
   // A bright spot of a few pixels far above half range over a dim sky, as a captured sun is.
-  registerEquirect("spot", 512, 256, [](int x, int y) { return x >= 300 && x < 302 && y >= 60 && y < 62 ? 2e5f : 2.0f; });
+  registerEquirect("spot", 512, 256,
+                   [](int x, int y) { return x >= 300 && x < 302 && y >= 60 && y < 62 ? 2e5f : 2.0f; });
   for (const char* name : {"sky", "studio", "cornell", "half_white", "spot"}) {
     auto report = renderer_->checkEnvironmentSampler(name);
     ASSERT_TRUE(report.ok()) << name << ": " << report.error().message;
-    std::printf("%-10s cells p %.3g, positions p %.3g, max |z| %.2f over %u bins, pdf mismatch %.2g (host %.2g, %.2g of draws), "
-                "length %.2g\n",
-                name, report->cellChi2PValue, report->positionChi2PValue, report->maxSolidAngleZ, report->solidAngleBins,
-                report->maxPdfMismatch, report->hostPdfMismatch, report->pdfMismatchFraction, report->maxLengthError);
+    std::printf(
+        "%-10s cells p %.3g, positions p %.3g, max |z| %.2f over %u bins, pdf mismatch %.2g (host %.2g, %.2g of "
+        "draws), "
+        "length %.2g\n",
+        name, report->cellChi2PValue, report->positionChi2PValue, report->maxSolidAngleZ, report->solidAngleBins,
+        report->maxPdfMismatch, report->hostPdfMismatch, report->pdfMismatchFraction, report->maxLengthError);
     EXPECT_TRUE(report->passed()) << name;
     EXPECT_GE(report->solidAngleBins, 100u) << name;
   }

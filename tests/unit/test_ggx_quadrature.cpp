@@ -142,9 +142,9 @@ class GgxQuadrature : public DeviceTest {
 
   struct Comparison {
     int pixels = 0;
-    double maxRelError = 0;        // over every interior pixel
-    double maxRelErrorNearZ = 0;   // over those whose centre normal is within 2.6 degrees of +z
-    double centreRelError = 0;     // signed, mean over the pixels nearest the image centre
+    double maxRelError = 0;       // over every interior pixel
+    double maxRelErrorNearZ = 0;  // over those whose centre normal is within 2.6 degrees of +z
+    double centreRelError = 0;    // signed, mean over the pixels nearest the image centre
     double minMu = 1;
   };
 
@@ -177,7 +177,6 @@ class GgxQuadrature : public DeviceTest {
     c.centreRelError = centreCount ? centreSum / centreCount : 0;
     return c;
   }
-
 };
 
 TEST_F(GgxQuadrature, TheQuadratureConvergesAndItsTableInterpolates) {
@@ -216,8 +215,7 @@ TEST_F(GgxQuadrature, EverySpherePixelMatchesTheQuadratureWithin1Percent) {
     EXPECT_LT(c.maxRelError, 0.01) << "alpha " << alpha;
     std::cout << "[ ggx quad ] alpha " << alpha << ": " << c.pixels << " pixels (mu >= " << c.minMu
               << "), max |rel error| " << c.maxRelError << ", near +z " << c.maxRelErrorNearZ << ", centre "
-              << c.centreRelError << ", frame rel_error "
-              << (f.stats.relError ? *f.stats.relError : -1.0) << "\n";
+              << c.centreRelError << ", frame rel_error " << (f.stats.relError ? *f.stats.relError : -1.0) << "\n";
   }
 }
 
@@ -241,9 +239,9 @@ TEST_F(GgxQuadrature, OldAndFixedSamplersNearTheZAxisAgainstTheQuadrature) {
     const Comparison after = compare(render(ggx, alpha, closeUp, size, spp), geometry, table);
     EXPECT_EQ(after.pixels, size * size);
     std::cout << "[ ggx quad ] close-up near +z at 62 degrees, alpha " << alpha << ": old sampler max |rel error| "
-              << before.maxRelError << " (normals within 2.6 deg of +z: " << before.maxRelErrorNearZ
-              << ", centre " << before.centreRelError << "); fixed " << after.maxRelError << " (near +z "
-              << after.maxRelErrorNearZ << ", centre " << after.centreRelError << ")\n";
+              << before.maxRelError << " (normals within 2.6 deg of +z: " << before.maxRelErrorNearZ << ", centre "
+              << before.centreRelError << "); fixed " << after.maxRelError << " (near +z " << after.maxRelErrorNearZ
+              << ", centre " << after.centreRelError << ")\n";
     // Measured (lavapipe, this integrator): the old frame's bias in these renders is small, at
     // most 0.3% (alpha 0.05 and 0.001), so only the fixed sampler is held to 1%, at alpha 0.05.
     // At alpha 0.001 the fixed sampler read up to 1.03% off here (open question, see the report).

@@ -27,31 +27,35 @@ const char* kIntegrator =
     "}\n";
 
 // A .brdf file with known line numbers; lines 9, 12 and 19 can be replaced by a broken line.
-std::string brdfFile(const std::string& line9 = "float unused = 1.0;",
-                     const std::string& line12 = "float k = 1.0;",
+std::string brdfFile(const std::string& line9 = "float unused = 1.0;", const std::string& line12 = "float k = 1.0;",
                      const std::string& line19 = "pdf *= 1.0;") {
-  return "analytic\n"                                                                   // 1
-         "::begin parameters\n"                                                         // 2
-         "float roughness 0 1 0.5\n"                                                    // 3
-         "color Kd 0.8 0.8 0.8\n"                                                       // 4
-         "bool useK 1\n"                                                                // 5
-         "::end parameters\n"                                                           // 6
-         "::begin shader\n"                                                             // 7
-         "const float PI = 3.14159265;\n"                                               // 8
-         + line9 + "\n"                                                                 // 9
-         "float helper(float x) { return useK ? x * roughness : x; }\n"                 // 10
-         "vec3 BRDF(vec3 L, vec3 V, vec3 N, vec3 X, vec3 Y) {\n"                        // 11
-         "  " + line12 + "\n"                                                           // 12
-         "  return Kd / PI * helper(dot(N, L)) * k;\n"                                  // 13
-         "}\n"                                                                          // 14
-         "::end shader\n"                                                               // 15
-         "::begin sample\n"                                                             // 16
+  return "analytic\n"                      // 1
+         "::begin parameters\n"            // 2
+         "float roughness 0 1 0.5\n"       // 3
+         "color Kd 0.8 0.8 0.8\n"          // 4
+         "bool useK 1\n"                   // 5
+         "::end parameters\n"              // 6
+         "::begin shader\n"                // 7
+         "const float PI = 3.14159265;\n"  // 8
+         + line9 +
+         "\n"                                                            // 9
+         "float helper(float x) { return useK ? x * roughness : x; }\n"  // 10
+         "vec3 BRDF(vec3 L, vec3 V, vec3 N, vec3 X, vec3 Y) {\n"         // 11
+         "  " +
+         line12 +
+         "\n"                                           // 12
+         "  return Kd / PI * helper(dot(N, L)) * k;\n"  // 13
+         "}\n"                                          // 14
+         "::end shader\n"                               // 15
+         "::begin sample\n"                             // 16
          "vec3 sampleBRDF(vec2 u, vec3 V, vec3 N, vec3 X, vec3 Y, out vec3 L, out float pdf) {\n"
-         "  L = N; pdf = 1.0;\n"                                                        // 18
-         "  " + line19 + "\n"                                                           // 19
-         "  return BRDF(L, V, N, X, Y);\n"                                              // 20
-         "}\n"                                                                          // 21
-         "::end sample\n";                                                              // 22
+         "  L = N; pdf = 1.0;\n"  // 18
+         "  " +
+         line19 +
+         "\n"                               // 19
+         "  return BRDF(L, V, N, X, Y);\n"  // 20
+         "}\n"                              // 21
+         "::end sample\n";                  // 22
 }
 
 // `chunks` go before the BRDF's text (as its inputs do).
@@ -129,8 +133,7 @@ TEST(GlslCompiler, UndeclaredIdentifierMapsToFileLine) {
 }
 
 TEST(GlslCompiler, ErrorInSampleSectionMapsToFileLine) {
-  Result<SpirvBinary> r =
-      compileBrdf(brdfFile("float unused = 1.0;", "float k = 1.0;", "pdf = undeclaredPdf;"));
+  Result<SpirvBinary> r = compileBrdf(brdfFile("float unused = 1.0;", "float k = 1.0;", "pdf = undeclaredPdf;"));
   ASSERT_FALSE(r.ok());
   EXPECT_EQ(firstDiagnostic(r).line, 19) << firstDiagnostic(r).message;
   EXPECT_NE(firstDiagnostic(r).message.find("undeclaredPdf"), std::string::npos);
@@ -143,15 +146,14 @@ TEST(GlslCompiler, ErrorInGeneratedCodeHasLineZero) {
   Result<SpirvBinary> r = compileBrdf(brdfFile(), integrator);
   ASSERT_FALSE(r.ok());
   EXPECT_EQ(firstDiagnostic(r).line, 0);
-  EXPECT_EQ(firstDiagnostic(r).message.rfind("in generated code: ", 0), 0u)
-      << firstDiagnostic(r).message;
+  EXPECT_EQ(firstDiagnostic(r).message.rfind("in generated code: ", 0), 0u) << firstDiagnostic(r).message;
   EXPECT_NE(firstDiagnostic(r).message.find("notInTheIntegrator"), std::string::npos);
 }
 
 TEST(GlslCompiler, UserDiagnosticsComeFirst) {
   // The generated chunk's warning is reported by glslang before the user's error.
-  Result<SpirvBinary> r = compileBrdf(brdfFile("float broken = 1.0 +;"), kIntegrator,
-                                      {"#extension GL_EXT_no_such_extension : warn\n"});
+  Result<SpirvBinary> r =
+      compileBrdf(brdfFile("float broken = 1.0 +;"), kIntegrator, {"#extension GL_EXT_no_such_extension : warn\n"});
   ASSERT_FALSE(r.ok());
   ASSERT_GE(r.error().diagnostics.size(), 2u);
   EXPECT_EQ(r.error().diagnostics[0].line, 9);
@@ -173,13 +175,11 @@ TEST(GlslCompiler, WarningsOfASuccessfulCompile) {
   ASSERT_EQ(r->warnings.size(), 1u);
   EXPECT_EQ(r->warnings[0].severity, "warning");
   EXPECT_EQ(r->warnings[0].line, 0);
-  EXPECT_EQ(r->warnings[0].message.rfind("in generated code: line 1: ", 0), 0u)
-      << r->warnings[0].message;
+  EXPECT_EQ(r->warnings[0].message.rfind("in generated code: line 1: ", 0), 0u) << r->warnings[0].message;
 }
 
 TEST(GlslCompiler, LinkErrorIsReported) {
-  Result<SpirvBinary> r = compileGlsl(ShaderStage::Compute,
-                                      "#version 450\nlayout(local_size_x = 1) in;\n");
+  Result<SpirvBinary> r = compileGlsl(ShaderStage::Compute, "#version 450\nlayout(local_size_x = 1) in;\n");
   ASSERT_FALSE(r.ok());
   EXPECT_EQ(r.error().code, ErrorCode::CompileError);
   ASSERT_FALSE(r.error().diagnostics.empty());
@@ -187,13 +187,11 @@ TEST(GlslCompiler, LinkErrorIsReported) {
 }
 
 TEST(GlslCompiler, OtherStages) {
-  Result<SpirvBinary> vs = compileGlsl(ShaderStage::Vertex,
-                                       "#version 450\nvoid main() { gl_Position = vec4(0); }\n");
+  Result<SpirvBinary> vs = compileGlsl(ShaderStage::Vertex, "#version 450\nvoid main() { gl_Position = vec4(0); }\n");
   ASSERT_TRUE(vs.ok()) << vs.error().message;
   EXPECT_EQ(vs->words[0], kSpirvMagic);
   Result<SpirvBinary> fs = compileGlsl(
-      ShaderStage::Fragment,
-      "#version 450\nlayout(location = 0) out vec4 c;\nvoid main() { c = vec4(1); }\n");
+      ShaderStage::Fragment, "#version 450\nlayout(location = 0) out vec4 c;\nvoid main() { c = vec4(1); }\n");
   ASSERT_TRUE(fs.ok()) << fs.error().message;
   EXPECT_EQ(fs->words[0], kSpirvMagic);
 }

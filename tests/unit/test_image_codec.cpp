@@ -106,7 +106,8 @@ TEST(Png, TextChunksTravelInsideTheFileAndStbStillDecodesIt) {
 
   // Each chunk's CRC covers its type and data (zlib's crc32, as PNG specifies).
   const size_t at = 33;  // after the signature and IHDR
-  const uint32_t length = (uint32_t(png[at]) << 24) | (uint32_t(png[at + 1]) << 16) | (uint32_t(png[at + 2]) << 8) | png[at + 3];
+  const uint32_t length =
+      (uint32_t(png[at]) << 24) | (uint32_t(png[at + 1]) << 16) | (uint32_t(png[at + 2]) << 8) | png[at + 3];
   ASSERT_EQ(std::string(png.begin() + at + 4, png.begin() + at + 8), "tEXt");
   const uint32_t crc = crc32(0, &png[at + 4], 4 + length);
   const uint8_t* stored = &png[at + 8 + length];
@@ -147,8 +148,7 @@ TEST(Pfm, RoundTrip) {
   ASSERT_EQ(dw, w);
   ASSERT_EQ(dh, h);
   ASSERT_EQ(out.size(), input.size());
-  for (size_t i = 0; i < input.size(); ++i)
-    EXPECT_EQ(out[i], i % 4 == 3 ? 1.0f : input[i]) << "index " << i;
+  for (size_t i = 0; i < input.size(); ++i) EXPECT_EQ(out[i], i % 4 == 3 ? 1.0f : input[i]) << "index " << i;
 }
 
 TEST(Pfm, DecodesGreyAndBigEndian) {

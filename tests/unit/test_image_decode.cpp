@@ -205,9 +205,9 @@ TEST(BuiltinTextures, CheckerHasEightByEightSquares) {
   ASSERT_EQ(tex->width, 256u);
   ASSERT_EQ(tex->height, 256u);
   auto at = [&](int x, int y) { return tex->rgba8[(size_t(y) * 256 + x) * 4]; };
-  EXPECT_EQ(at(0, 0), 204);    // sRGB 0.8
+  EXPECT_EQ(at(0, 0), 204);  // sRGB 0.8
   EXPECT_EQ(at(31, 31), 204);
-  EXPECT_EQ(at(32, 0), 51);    // sRGB 0.2
+  EXPECT_EQ(at(32, 0), 51);  // sRGB 0.2
   EXPECT_EQ(at(0, 32), 51);
   EXPECT_EQ(at(255, 255), 204);  // 8 squares: (7 + 7) is even
   EXPECT_EQ(at(224, 0), 51);
@@ -218,8 +218,8 @@ TEST(BuiltinTextures, UvGridEncodesUvWithLines) {
   ASSERT_TRUE(tex.ok());
   ASSERT_EQ(tex->width, 256u);
   auto px = [&](int x, int y) { return &tex->rgba8[(size_t(y) * 256 + x) * 4]; };
-  EXPECT_EQ(px(40, 70)[0], 40);   // red = u
-  EXPECT_EQ(px(40, 70)[1], 70);   // green = v, 0 at the top
+  EXPECT_EQ(px(40, 70)[0], 40);  // red = u
+  EXPECT_EQ(px(40, 70)[1], 70);  // green = v, 0 at the top
   EXPECT_EQ(px(40, 70)[2], 0);
   EXPECT_EQ(px(200, 10)[0], 200);
   EXPECT_EQ(px(200, 10)[1], 10);

@@ -193,7 +193,7 @@ TEST(Meshes, CubeHasFlatFacesWithOwnUvs) {
   for (const Vertex& v : m.vertices) {
     const glm::vec3 n = normal(v);
     EXPECT_FLOAT_EQ(glm::dot(glm::abs(n), glm::vec3(1)), 1.0f);  // axis-aligned
-    EXPECT_FLOAT_EQ(glm::dot(position(v), n), 1.0f);               // on the face the normal names
+    EXPECT_FLOAT_EQ(glm::dot(position(v), n), 1.0f);             // on the face the normal names
     EXPECT_TRUE(v.texCoord[0] == 0.0f || v.texCoord[0] == 1.0f);
     EXPECT_TRUE(v.texCoord[1] == 0.0f || v.texCoord[1] == 1.0f);
   }
@@ -233,11 +233,11 @@ TEST(Meshes, TeapotDataMatchesTheKnownDimensions) {
       }
   EXPECT_NEAR(lo.z, 0.0, 1e-9);
   EXPECT_NEAR(hi.z, 3.15, 1e-6);
-  EXPECT_NEAR(lo.x, -3.0, 1e-6);       // handle
-  EXPECT_NEAR(hi.x, 3.434, 0.01);      // spout tip
-  EXPECT_NEAR(lo.y, -2.0, 1e-6);       // body, widest
+  EXPECT_NEAR(lo.x, -3.0, 1e-6);   // handle
+  EXPECT_NEAR(hi.x, 3.434, 0.01);  // spout tip
+  EXPECT_NEAR(lo.y, -2.0, 1e-6);   // body, widest
   EXPECT_NEAR(hi.y, 2.0, 1e-6);
-  for (int p = 4; p < 8; ++p)          // upper body patches: top edge is the rim circle
+  for (int p = 4; p < 8; ++p)  // upper body patches: top edge is the rim circle
     for (int j = 0; j <= 8; ++j) {
       const glm::dvec3 q = evaluateTeapotPatch(p, j / 8.0, 0.0).position;
       EXPECT_NEAR(q.z, 2.4, 1e-6);
@@ -361,8 +361,13 @@ TEST(MeshFrames, DegenerateUvTrianglesFallBack) {
 }
 
 TEST(MeshFrames, OrthonormalBasisIsRightHandedEverywhere) {
-  const glm::vec3 normals[] = {{0, 0, 1}, {0, 0, -1}, {1, 0, 0}, {0, -1, 0}, {0.6f, 0, -0.8f},
-                               glm::normalize(glm::vec3(1, 2, 3)), glm::normalize(glm::vec3(1e-4f, -1e-4f, -1))};
+  const glm::vec3 normals[] = {{0, 0, 1},
+                               {0, 0, -1},
+                               {1, 0, 0},
+                               {0, -1, 0},
+                               {0.6f, 0, -0.8f},
+                               glm::normalize(glm::vec3(1, 2, 3)),
+                               glm::normalize(glm::vec3(1e-4f, -1e-4f, -1))};
   for (glm::vec3 n : normals) {
     glm::vec3 t, b;
     orthonormalBasis(n, t, b);

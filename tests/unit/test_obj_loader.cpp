@@ -32,8 +32,7 @@ const char* const kCubeFacesFull =
     "f 8/1/4 7/2/4 3/3/4 4/4/4\n"
     "f 1/1/5 5/2/5 8/3/5 4/4/5\n"
     "f 6/1/6 2/2/6 3/3/6 7/4/6\n";
-const char* const kCubeFacesPositionsOnly =
-    "f 2 1 4 3\nf 5 6 7 8\nf 1 2 6 5\nf 8 7 3 4\nf 1 5 8 4\nf 6 2 3 7\n";
+const char* const kCubeFacesPositionsOnly = "f 2 1 4 3\nf 5 6 7 8\nf 1 2 6 5\nf 8 7 3 4\nf 1 5 8 4\nf 6 2 3 7\n";
 
 std::string cubeObj() { return std::string(kCubePositions) + kCubeTexCoords + kCubeNormals + kCubeFacesFull; }
 
@@ -94,7 +93,7 @@ TEST(ObjLoader, CubeWithNormalsAndUvs) {
     const Vertex& a = m.vertices[m.indices[t]];
     const glm::vec3 g = glm::cross(position(m.vertices[m.indices[t + 1]]) - position(a),
                                    position(m.vertices[m.indices[t + 2]]) - position(a));
-    EXPECT_GT(glm::dot(g, normal(a)), 0.0f);                 // file normals kept, winding outward
+    EXPECT_GT(glm::dot(g, normal(a)), 0.0f);                  // file normals kept, winding outward
     EXPECT_FLOAT_EQ(glm::dot(position(a), normal(a)), 1.0f);  // the file's face normals
   }
 }
@@ -154,10 +153,11 @@ TEST(ObjLoader, TangentsFollowTheUvs) {
 
 TEST(ObjLoader, MergesShapes) {
   AssetInfo info;
-  const MeshData m = loadOk("o a\nv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n"
-                            "o b\nv 0 0 1\nv 1 0 1\nv 0 1 1\nf 4 5 6\nf 4 5 6\n"
-                            "o empty\n",
-                            &info);
+  const MeshData m = loadOk(
+      "o a\nv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n"
+      "o b\nv 0 0 1\nv 1 0 1\nv 0 1 1\nf 4 5 6\nf 4 5 6\n"
+      "o empty\n",
+      &info);
   EXPECT_EQ(info.shapes, 2u);
   EXPECT_EQ(info.triangles, 3u);
   EXPECT_EQ(m.vertices.size(), 6u);  // the repeated face reuses its vertices
@@ -166,10 +166,11 @@ TEST(ObjLoader, MergesShapes) {
 TEST(ObjLoader, TriangulatesQuadsAndPentagons) {
   AssetInfo info;
   // A unit square and a regular-ish convex pentagon (area 2.5 + 0.5 = 3) in the z = 0 plane.
-  const MeshData m = loadOk("v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\n"
-                            "v 2 0 0\nv 4 0 0\nv 4 1 0\nv 3 1.5 0\nv 2 1 0\n"
-                            "f 1 2 3 4\nf 5 6 7 8 9\n",
-                            &info);
+  const MeshData m = loadOk(
+      "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\n"
+      "v 2 0 0\nv 4 0 0\nv 4 1 0\nv 3 1.5 0\nv 2 1 0\n"
+      "f 1 2 3 4\nf 5 6 7 8 9\n",
+      &info);
   EXPECT_EQ(info.triangles, 2u + 3u);
   EXPECT_NEAR(totalArea(m), 1.0 + 2.5, 1e-6);  // the pieces cover each polygon exactly once
   for (const Vertex& v : m.vertices) EXPECT_EQ(normal(v), glm::vec3(0, 0, 1));

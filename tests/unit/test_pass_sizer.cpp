@@ -55,8 +55,8 @@ TEST(PassSizer, ASmallFixedPartLetsPassesShrinkToOneSample) {
   s.record(4, 42);
   EXPECT_EQ(s.fit(30, 8), 2u);
   EXPECT_EQ(s.fit(12, 8), 1u);
-  EXPECT_EQ(s.fit(8, 8), 1u);   // 12 ms: within twice the target
-  EXPECT_EQ(s.fit(5, 8), 8u);   // out of reach
+  EXPECT_EQ(s.fit(8, 8), 1u);  // 12 ms: within twice the target
+  EXPECT_EQ(s.fit(5, 8), 8u);  // out of reach
   EXPECT_EQ(s.fit(12, 0), 1u);
 }
 

@@ -372,8 +372,8 @@ TEST(EnvironmentPreview, CellsHoldTheMapsIntegralAtTheCubesScale) {
     const uint32_t P = kPreviewCellsPerEdge;
     auto halfToFloat = [](uint32_t h) {
       const uint32_t sign = h >> 15, exponent = (h >> 10) & 31, mantissa = h & 1023;
-      const float magnitude = exponent == 0 ? std::ldexp(float(mantissa), -24)
-                                            : std::ldexp(float(mantissa | 1024), int(exponent) - 25);
+      const float magnitude =
+          exponent == 0 ? std::ldexp(float(mantissa), -24) : std::ldexp(float(mantissa | 1024), int(exponent) - 25);
       return sign ? -magnitude : magnitude;
     };
     double cells[3] = {0, 0, 0};

@@ -44,10 +44,8 @@ std::vector<std::string> linesOf(const std::string& text) {
 TEST(ParamLayout, Std140OffsetsForMixedTypes) {
   // std140: a=0 (4 bytes); b is a vec3, 16-aligned -> 16..28; c (bool as uint) packs into the
   // vec3's tail at 28; d at 32; end 36 rounds up to 48.
-  ParamBlockLayout l = layoutParams({makeParam("a", ParamType::Float),
-                                     makeParam("b", ParamType::Color),
-                                     makeParam("c", ParamType::Bool),
-                                     makeParam("d", ParamType::Float)});
+  ParamBlockLayout l = layoutParams({makeParam("a", ParamType::Float), makeParam("b", ParamType::Color),
+                                     makeParam("c", ParamType::Bool), makeParam("d", ParamType::Float)});
   ASSERT_EQ(l.entries.size(), 4u);
   EXPECT_EQ(l.entries[0].offset, 0u);
   EXPECT_EQ(l.entries[1].offset, 16u);
@@ -63,8 +61,7 @@ TEST(ParamLayout, OtherShapes) {
   EXPECT_TRUE(layoutParams({}).entries.empty());
   EXPECT_EQ(layoutParams({makeParam("a", ParamType::Float)}).size, 16u);
 
-  ParamBlockLayout two = layoutParams({makeParam("a", ParamType::Color),
-                                       makeParam("b", ParamType::Color)});
+  ParamBlockLayout two = layoutParams({makeParam("a", ParamType::Color), makeParam("b", ParamType::Color)});
   EXPECT_EQ(two.entries[1].offset, 16u);
   EXPECT_EQ(two.size, 32u);
 
@@ -75,16 +72,14 @@ TEST(ParamLayout, OtherShapes) {
   EXPECT_EQ(f.size, 32u);
 
   // float then color: the color must skip to 16, not sit at 4.
-  ParamBlockLayout fc = layoutParams({makeParam("a", ParamType::Float),
-                                      makeParam("b", ParamType::Color)});
+  ParamBlockLayout fc = layoutParams({makeParam("a", ParamType::Float), makeParam("b", ParamType::Color)});
   EXPECT_EQ(fc.entries[1].offset, 16u);
   EXPECT_EQ(fc.size, 32u);
 }
 
 TEST(ParamLayout, GlslDeclaration) {
-  ParamBlockLayout l = layoutParams({makeParam("roughness", ParamType::Float),
-                                     makeParam("Kd", ParamType::Color),
-                                     makeParam("iso", ParamType::Bool)});
+  ParamBlockLayout l = layoutParams(
+      {makeParam("roughness", ParamType::Float), makeParam("Kd", ParamType::Color), makeParam("iso", ParamType::Bool)});
   EXPECT_EQ(l.glsl(),
             "layout(std140, set = 1, binding = 0) uniform BrdfParams {\n"
             "  float roughness;\n"
@@ -99,10 +94,8 @@ TEST(ParamLayout, GlslDeclaration) {
 
 TEST(ParamLayout, PackWritesDefaultsAndGivenValues) {
   BrdfDefinition brdf;
-  brdf.params = {makeParam("a", ParamType::Float, {0.25f, 0, 0}),
-                 makeParam("b", ParamType::Color, {0.1f, 0.2f, 0.3f}),
-                 makeParam("c", ParamType::Bool, {1, 0, 0}),
-                 makeParam("d", ParamType::Float, {0.75f, 0, 0})};
+  brdf.params = {makeParam("a", ParamType::Float, {0.25f, 0, 0}), makeParam("b", ParamType::Color, {0.1f, 0.2f, 0.3f}),
+                 makeParam("c", ParamType::Bool, {1, 0, 0}), makeParam("d", ParamType::Float, {0.75f, 0, 0})};
   ParamBlockLayout l = layoutParams(brdf.params);
 
   std::vector<uint8_t> defaults = l.pack(brdf, {});
@@ -115,7 +108,8 @@ TEST(ParamLayout, PackWritesDefaultsAndGivenValues) {
   EXPECT_FLOAT_EQ(floatAt(defaults, 32), 0.75f);
   for (uint32_t o : {4u, 8u, 12u, 36u, 40u, 44u}) EXPECT_EQ(uintAt(defaults, o), 0u) << o;
 
-  std::vector<uint8_t> given = l.pack(brdf, {{"b", {0.9f, 0.8f, 0.7f}}, {"c", {0, 0, 0}},
+  std::vector<uint8_t> given = l.pack(brdf, {{"b", {0.9f, 0.8f, 0.7f}},
+                                             {"c", {0, 0, 0}},
                                              {"d", {5.0f, 0, 0}},  // not clamped here
                                              {"unknown", {1, 1, 1}}});
   EXPECT_FLOAT_EQ(floatAt(given, 0), 0.25f);  // default kept
@@ -143,8 +137,9 @@ class Assembly : public ::testing::Test {
  protected:
   void SetUp() override {
     brdf.params = {makeParam("roughness", ParamType::Float, {0.5f, 0, 0})};
-    brdf.shader = "float f() { return roughness; }\nvec3 BRDF(vec3 L, vec3 V, vec3 N, vec3 X, "
-                  "vec3 Y) { return vec3(f()); }";  // no trailing newline on purpose
+    brdf.shader =
+        "float f() { return roughness; }\nvec3 BRDF(vec3 L, vec3 V, vec3 N, vec3 X, "
+        "vec3 Y) { return vec3(f()); }";  // no trailing newline on purpose
     brdf.shaderFirstLine = 7;
     spec.brdf = &brdf;
     spec.defines = {"BRDFA_ONE", "BRDFA_TWO 2"};
@@ -185,8 +180,7 @@ TEST_F(Assembly, FixedOrderAndLineDirectives) {
 
   // `#line k 0` after the user's text names the true line of the line after it.
   for (size_t i = 0; i < lines.size(); ++i) {
-    if (lines[i].rfind("#line ", 0) == 0 && lines[i].size() > 2 &&
-        lines[i].substr(lines[i].size() - 2) == " 0") {
+    if (lines[i].rfind("#line ", 0) == 0 && lines[i].size() > 2 && lines[i].substr(lines[i].size() - 2) == " 0") {
       const int k = std::stoi(lines[i].substr(6));
       EXPECT_EQ(k, static_cast<int>(i) + 2) << "directive on line " << i + 1;
       ASSERT_LT(i + 1, lines.size());
@@ -199,8 +193,9 @@ TEST_F(Assembly, FixedOrderAndLineDirectives) {
 
 TEST_F(Assembly, MacrosOfTheBrdfEndWithItsText) {
   // A BRDF's macros must not rewrite the integrator's code after it.
-  brdf.shader = "#define brdfa_accum evil\n  #  define  TWO 2.0\n#if 0\n#define HIDDEN 1\n#endif\n"
-                "vec3 BRDF(vec3 L, vec3 V, vec3 N, vec3 X, vec3 Y) { return vec3(TWO); }\n";
+  brdf.shader =
+      "#define brdfa_accum evil\n  #  define  TWO 2.0\n#if 0\n#define HIDDEN 1\n#endif\n"
+      "vec3 BRDF(vec3 L, vec3 V, vec3 N, vec3 X, vec3 Y) { return vec3(TWO); }\n";
   AssembledProgram p = assembleProgram(spec);
   const size_t lastUser = p.source.find("vec3 BRDF(");
   const size_t chunkA = p.source.find("// chunk A");
@@ -213,8 +208,9 @@ TEST_F(Assembly, MacrosOfTheBrdfEndWithItsText) {
 }
 
 TEST_F(Assembly, SampleSectionGetsItsOwnLine) {
-  brdf.sampleShader = "vec3 sampleBRDF(vec2 u, vec3 V, vec3 N, vec3 X, vec3 Y, out vec3 L, "
-                      "out float pdf) { L = N; pdf = 1.0; return vec3(1); }\n";
+  brdf.sampleShader =
+      "vec3 sampleBRDF(vec2 u, vec3 V, vec3 N, vec3 X, vec3 Y, out vec3 L, "
+      "out float pdf) { L = N; pdf = 1.0; return vec3(1); }\n";
   brdf.sampleFirstLine = 20;
   AssembledProgram p = assembleProgram(spec);
   const size_t user = p.source.find("#line 7 1\n");
@@ -245,8 +241,9 @@ TEST_F(Assembly, UserFunctionsNamedLikeBuiltinsAreRenamedForUserTextOnly) {
       "  float t = max(0.0, dot(reflect(L, N), V));\n"  // calls are not declarations
       "  return vec3(step(0.5, t) * roughness);\n"
       "}\n";
-  brdf.sampleShader = "vec3 sampleBRDF(vec2 u, vec3 V, vec3 N, vec3 X, vec3 Y, out vec3 L, "
-                      "out float pdf) { L = reflect(V, N); pdf = 1.0; return BRDF(L, V, N, X, Y); }\n";
+  brdf.sampleShader =
+      "vec3 sampleBRDF(vec2 u, vec3 V, vec3 N, vec3 X, vec3 Y, out vec3 L, "
+      "out float pdf) { L = reflect(V, N); pdf = 1.0; return BRDF(L, V, N, X, Y); }\n";
   brdf.sampleFirstLine = 30;
   AssembledProgram p = assembleProgram(spec);
   const std::string& src = p.source;
@@ -291,10 +288,11 @@ TEST_F(Assembly, UserFunctionsNamedLikeBuiltinsAreRenamedForUserTextOnly) {
 }
 
 TEST_F(Assembly, NoRenamingWithoutBuiltinNamedDeclarations) {
-  brdf.shader = "float reflectance(float x) { return x; }\n"  // a prefix of a built-in name
-                "vec3 BRDF(vec3 L, vec3 V, vec3 N, vec3 X, vec3 Y) {\n"
-                "  return reflect(-L, N) * reflectance(roughness);\n"
-                "}\n";
+  brdf.shader =
+      "float reflectance(float x) { return x; }\n"  // a prefix of a built-in name
+      "vec3 BRDF(vec3 L, vec3 V, vec3 N, vec3 X, vec3 Y) {\n"
+      "  return reflect(-L, N) * reflectance(roughness);\n"
+      "}\n";
   const std::string src = assembleProgram(spec).source;
   EXPECT_EQ(src.find("#define reflect"), std::string::npos) << src;
   EXPECT_EQ(src.find("#undef"), std::string::npos) << src;
@@ -314,11 +312,13 @@ constexpr const char* kOverrideIntegrator =
     "}\n";
 
 std::string overridingShader(const std::string& line5) {
-  return "vec3 reflect(vec3 d, vec3 n)\n"                                          // 10
-         "{ return 2.0 * dot(d, n) * n - d; }\n"                                   // 11
+  return "vec3 reflect(vec3 d, vec3 n)\n"         // 10
+         "{ return 2.0 * dot(d, n) * n - d; }\n"  // 11
          "float smoothstep(float lo, float hi, float x) { return x < lo ? 0.0 : 1.0; }\n"
-         "vec3 BRDF(vec3 L, vec3 V, vec3 N, vec3 X, vec3 Y) {\n"                   // 13
-         "  " + line5 + "\n"                                                       // 14
+         "vec3 BRDF(vec3 L, vec3 V, vec3 N, vec3 X, vec3 Y) {\n"  // 13
+         "  " +
+         line5 +
+         "\n"  // 14
          "  return vec3(smoothstep(0.9, 1.0, dot(reflect(L, N), V)) * roughness);\n"
          "}\n";
 }
@@ -329,8 +329,7 @@ TEST_F(Assembly, BuiltinOverridesCompileAndKeepLineNumbers) {
   brdf.shaderFirstLine = 10;
   brdf.shader = overridingShader("float unused = 1.0;");
   Result<SpirvBinary> ok = compileGlsl(ShaderStage::Compute, assembleProgram(spec).source);
-  EXPECT_TRUE(ok.ok()) << (ok.ok() ? "" : ok.error().message) << "\n"
-                       << assembleProgram(spec).source;
+  EXPECT_TRUE(ok.ok()) << (ok.ok() ? "" : ok.error().message) << "\n" << assembleProgram(spec).source;
 
   brdf.shader = overridingShader("float broken = ;");
   Result<SpirvBinary> bad = compileGlsl(ShaderStage::Compute, assembleProgram(spec).source);

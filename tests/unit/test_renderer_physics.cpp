@@ -113,7 +113,9 @@ TEST_F(RendererPhysics, TexCoordReachesTheBrdfAsTheMeshsUvs) {
 const float PI = 3.14159265358979323846;
 vec3 BRDF(vec3 L, vec3 V, vec3 N, vec3 X, vec3 Y) { return vec3(texCoord, 0.0) / PI; }
 ::end shader
-)"), 64, 16)).ok());
+)"),
+                                          64, 16))
+                  .ok());
   Frame f = renderToConvergence(*view);
   auto px = interiorRgb(f);
   ASSERT_GT(px.size(), 500u);
@@ -169,7 +171,7 @@ TEST_F(RendererPhysics, VisibleEnvironmentIsTheBackgroundAtItsIntensity) {
   auto view = renderer_->createView().value();
   ASSERT_TRUE(view->setScene(s).ok());
   Frame f = renderToConvergence(*view);
-  EXPECT_FLOAT_EQ(f.rgba32f[0], 2.5f);  // corner: background
+  EXPECT_FLOAT_EQ(f.rgba32f[0], 2.5f);                      // corner: background
   EXPECT_NEAR(f.rgba32f[4 * (16 * 32 + 16)], 2.5f, 1e-5f);  // centre: white sphere
 }
 
@@ -194,8 +196,9 @@ TEST_F(RendererPhysics, LegacyRenderIsThePlainAverageOverTheHemisphere) {
       {"return texture(iTexture0, textureCord).rgb;", 1.0f, 1e-5f},
   };
   for (const Case& c : cases) {
-    std::string text = std::string("#define PI 3.14159265359\n"
-                                   "vec3 render(vec3 L, vec3 N, vec3 V, vec2 textureCord, mat3 worldToLocal) {\n") +
+    std::string text = std::string(
+                           "#define PI 3.14159265359\n"
+                           "vec3 render(vec3 L, vec3 N, vec3 V, vec2 textureCord, mat3 worldToLocal) {\n") +
                        c.body + "\n}\n";
     auto brdf = inlineBrdf(text);
     ASSERT_EQ(brdf->format, BrdfFormat::Legacy);
@@ -275,8 +278,7 @@ TEST_F(RendererPhysics, LegacyFileWithItsOwnPiOrLiUsesItsOwn) {
 // of the sphere has another normal, almost all of them off the axes.
 TEST_F(RendererPhysics, LegacyWorldToLocalIsTheEnginesViewAlignedFrame) {
   // worldToLocal * N = (0, 1, 0): with rows X, Y, N it would be (0, 0, 1).
-  std::vector<Vec3> px =
-      legacyFurnacePixels(engineStyleFile("", "return 0.5 + 0.5 * (worldToLocal * N);"), 16);
+  std::vector<Vec3> px = legacyFurnacePixels(engineStyleFile("", "return 0.5 + 0.5 * (worldToLocal * N);"), 16);
   ASSERT_GT(px.size(), 300u);
   for (const Vec3& v : px) {
     ASSERT_NEAR(v[0], 0.5f, 1e-4f);
@@ -285,10 +287,12 @@ TEST_F(RendererPhysics, LegacyWorldToLocalIsTheEnginesViewAlignedFrame) {
   }
   // The first and third rows: V goes to (0, N.V, -|V x N|) and V x N to (|V x N|, 0, 0). The
   // file returns 1 plus the residuals.
-  px = legacyFurnacePixels(engineStyleFile("", "vec3 c = cross(V, N);\n"
-                                               "\treturn vec3(1.0) + abs(worldToLocal * V - vec3(0.0, dot(N, V), -length(c)))\n"
-                                               "\t     + abs(worldToLocal * c - vec3(length(c), 0.0, 0.0));"),
-                           16);
+  px = legacyFurnacePixels(
+      engineStyleFile("",
+                      "vec3 c = cross(V, N);\n"
+                      "\treturn vec3(1.0) + abs(worldToLocal * V - vec3(0.0, dot(N, V), -length(c)))\n"
+                      "\t     + abs(worldToLocal * c - vec3(length(c), 0.0, 0.0));"),
+      16);
   ASSERT_GT(px.size(), 300u);
   for (const Vec3& v : px)
     for (int i = 0; i < 3; ++i) ASSERT_NEAR(v[i], 1.0f, 1e-4f) << "channel " << i;
@@ -368,7 +372,8 @@ TEST_F(RendererPhysics, AnisotropicHighlightFollowsTheTangentAndTurnsWithTheObje
   // camera at +3 z looks down -z, so a world direction (tx, ty, tz) at p moves the image point
   // along (tx + x_ndc tz, -(ty + y_ndc tz)) up to a positive factor (y down in the image).
   const double pi = 3.14159265358979323846, tanHalf = std::tan(22.5 * pi / 180.0);
-  const double nx = (2.0 * (along.cx + 0.5) / size - 1.0) * tanHalf, ny = (1.0 - 2.0 * (along.cy + 0.5) / size) * tanHalf;
+  const double nx = (2.0 * (along.cx + 0.5) / size - 1.0) * tanHalf,
+               ny = (1.0 - 2.0 * (along.cy + 0.5) / size) * tanHalf;
   // Ray from (0, 0, 3) along (nx, ny, -1) meets the unit sphere at p; tangent = (p.z, 0, -p.x).
   const double dd = nx * nx + ny * ny + 1, b = -3.0, c = 9.0 - 1.0;
   const double t = (-b - std::sqrt(b * b - dd * c)) / dd;
@@ -446,9 +451,13 @@ TEST_F(RendererPhysics, GgxInFurnaceMatchesItsDirectionalAlbedo) {
   // White furnace, F = 1: a pixel shows the directional albedo E(mu) of single-scattering GGX,
   // which loses energy as roughness grows (Kulla and Conty 2017). E(1), normal incidence,
   // integrated independently on a 200k-point stratified grid of the same formulas.
-  struct Case { float roughness; double albedo; double tolerance; };
-  for (Case c : {Case{1.0f, 0.30685, 0.01}, Case{0.5f, 0.68785, 0.015}, Case{0.3f, 0.87736, 0.02},
-                 Case{0.1f, 0.98830, 0.06}}) {
+  struct Case {
+    float roughness;
+    double albedo;
+    double tolerance;
+  };
+  for (Case c :
+       {Case{1.0f, 0.30685, 0.01}, Case{0.5f, 0.68785, 0.015}, Case{0.3f, 0.87736, 0.02}, Case{0.1f, 0.98830, 0.06}}) {
     Scene s = furnaceScene(builtin("ggx"), 48, 1024);
     s.objects[0].params["roughness"] = {c.roughness, 0, 0};
     s.objects[0].params["F0"] = {1, 1, 1};
@@ -487,7 +496,8 @@ TEST_F(RendererPhysics, RelativeErrorFallsAsSamplesAccumulate) {
 TEST_F(RendererPhysics, CompileErrorLeavesThePreviousSceneInPlace) {
   auto view = renderer_->createView().value();
   ASSERT_TRUE(view->setScene(furnaceScene(builtin("lambert"), 32, 4)).ok());
-  auto broken = inlineBrdf("analytic\n::begin shader\nvec3 BRDF(vec3 L, vec3 V, vec3 N, vec3 X, vec3 Y) { return nope; }\n::end shader\n");
+  auto broken = inlineBrdf(
+      "analytic\n::begin shader\nvec3 BRDF(vec3 L, vec3 V, vec3 N, vec3 X, vec3 Y) { return nope; }\n::end shader\n");
   auto r = view->setScene(furnaceScene(broken, 32, 4));
   ASSERT_FALSE(r.ok());
   EXPECT_EQ(r.error().code, ErrorCode::CompileError);

@@ -66,9 +66,8 @@ TEST_F(Samplers, EveryBuiltinSamplerMatchesItsPdfAndItsBrdf) {
     EXPECT_EQ(r->chi2PValues.size(), r->configurations);
     EXPECT_LT(r->ms, 3000.0) << entry.path().filename() << " took " << r->ms << " ms";
     std::cout << "[ sampler  ] " << entry.path().filename().string() << ": " << r->configurations
-              << " configurations x " << r->samplesPerConfiguration << " samples in " << r->ms
-              << " ms; min chi2 p " << r->minChi2PValue << " (threshold " << r->chi2Threshold << "), worst: "
-              << r->worst << "\n";
+              << " configurations x " << r->samplesPerConfiguration << " samples in " << r->ms << " ms; min chi2 p "
+              << r->minChi2PValue << " (threshold " << r->chi2Threshold << "), worst: " << r->worst << "\n";
   }
   EXPECT_GE(withSampler, 6);  // lambert, ggx, phong_normalized, blinn_phong_normalized, ward, cook_torrance
 }
@@ -144,9 +143,9 @@ TEST_F(Samplers, AValueThatIsNotTheBrdfFails) {
 TEST_F(Samplers, ASamplerThatMissesPartOfTheLobeFails) {
   // Samples only the upper half of the cosine lobe's radius, with the matching density there:
   // every sample is consistent, but the estimate loses the missed directions (biased).
-  auto r = renderer_->checkSampler(parse(lambertVariant(
-      "z / PI * 2.0", "BRDF(L, V, N, X, Y)",
-      "float r = sqrt(0.5 * u.x), phi = 2.0 * PI * u.y, z = sqrt(max(0.0, 1.0 - 0.5 * u.x));")));
+  auto r = renderer_->checkSampler(
+      parse(lambertVariant("z / PI * 2.0", "BRDF(L, V, N, X, Y)",
+                           "float r = sqrt(0.5 * u.x), phi = 2.0 * PI * u.y, z = sqrt(max(0.0, 1.0 - 0.5 * u.x));")));
   ASSERT_TRUE(r.ok());
   EXPECT_GT(r->maxAlbedoZ, 10.0);
   EXPECT_FALSE(r->passed());
@@ -160,8 +159,8 @@ TEST_F(Samplers, WithoutPdfBrdfTheChiSquareTestDoesNotRun) {
 }
 
 TEST_F(Samplers, ACorrectSamplerWithItsPdfPassesTheChiSquareTest) {
-  auto r = renderer_->checkSampler(
-      parse(lambertWithPdf(kCosineDraw, "pdfBRDF(L, V, N, X, Y)", "max(dot(N, L), 0.0) / PI")));
+  auto r =
+      renderer_->checkSampler(parse(lambertWithPdf(kCosineDraw, "pdfBRDF(L, V, N, X, Y)", "max(dot(N, L), 0.0) / PI")));
   ASSERT_TRUE(r.ok()) << r.error().message;
   EXPECT_TRUE(r->chi2Run);
   EXPECT_TRUE(r->chi2Failure.empty()) << r->chi2Failure;
@@ -198,8 +197,8 @@ TEST_F(Samplers, AReturnedPdfThatIsNotPdfBrdfFails) {
 
 TEST_F(Samplers, SamplesWherePdfBrdfIsZeroFailTheChiSquareTest) {
   // pdfBRDF says nothing is drawn with phi < 0 (y < 0); the sampler draws there anyway.
-  auto r = renderer_->checkSampler(parse(
-      lambertWithPdf(kCosineDraw, "z / PI", "(L.z > 0.0 && L.y >= 0.0) ? 2.0 * L.z / PI : 0.0")));
+  auto r = renderer_->checkSampler(
+      parse(lambertWithPdf(kCosineDraw, "z / PI", "(L.z > 0.0 && L.y >= 0.0) ? 2.0 * L.z / PI : 0.0")));
   ASSERT_TRUE(r.ok()) << r.error().message;
   EXPECT_TRUE(r->chi2Run);
   EXPECT_EQ(r->minChi2PValue, 0.0);
@@ -259,9 +258,9 @@ TEST_F(Samplers, TheCheckCoversNormalsNearEveryAxisAndViewsUpToGrazing) {
 
 TEST_F(Samplers, DirectionsThatAreNotUnitLengthFail) {
   // Cosine draws with z 0.05% too long: the density is nearly right, the length is not.
-  auto r = renderer_->checkSampler(parse(lambertVariant(
-      "z / PI", "BRDF(L, V, N, X, Y)",
-      "float r = sqrt(u.x), phi = 2.0 * PI * u.y, z = 1.0005 * sqrt(max(0.0, 1.0 - u.x));")));
+  auto r = renderer_->checkSampler(
+      parse(lambertVariant("z / PI", "BRDF(L, V, N, X, Y)",
+                           "float r = sqrt(u.x), phi = 2.0 * PI * u.y, z = 1.0005 * sqrt(max(0.0, 1.0 - u.x));")));
   ASSERT_TRUE(r.ok()) << r.error().message;
   EXPECT_GT(r->maxLengthError, 4e-4);
   EXPECT_LT(r->maxLengthError, 6e-4);
@@ -273,9 +272,9 @@ TEST_F(Samplers, DirectionsThatAreNotUnitLengthFail) {
 TEST_F(Samplers, APositivePdfBelowTheHorizonFails) {
   // Uniform over the whole sphere with its pdf 1 / (4 pi): half the draws are below the
   // horizon with pdf > 0 (a sampler must reject them with pdf 0).
-  auto r = renderer_->checkSampler(parse(lambertVariant(
-      "1.0 / (4.0 * PI)", "BRDF(L, V, N, X, Y)",
-      "float z = 1.0 - 2.0 * u.x, r = sqrt(max(0.0, 1.0 - z * z)), phi = 2.0 * PI * u.y;")));
+  auto r = renderer_->checkSampler(
+      parse(lambertVariant("1.0 / (4.0 * PI)", "BRDF(L, V, N, X, Y)",
+                           "float z = 1.0 - 2.0 * u.x, r = sqrt(max(0.0, 1.0 - z * z)), phi = 2.0 * PI * u.y;")));
   ASSERT_TRUE(r.ok()) << r.error().message;
   EXPECT_GT(r->pdfBelowHorizon, r->samples / 4);
   EXPECT_FALSE(r->passed());

@@ -407,7 +407,8 @@ TEST(SplitPasses, APassPastItsFrameTargetReturnsPartwayAndShowsWhereItGot) {
   for (size_t i = 0; i < last.rgba32f.size(); i += 4) {
     if (std::abs(last.rgba32f[i] - 1.0f) > 1e-5f) continue;  // background, or an edge
     ++ones;
-    for (const Frame& f : midPass) ASSERT_NEAR(f.rgba32f[i], 1.0f, 1e-5f) << "pixel " << i / 4 << " at spp " << f.stats.spp;
+    for (const Frame& f : midPass)
+      ASSERT_NEAR(f.rgba32f[i], 1.0f, 1e-5f) << "pixel " << i / 4 << " at spp " << f.stats.spp;
   }
   EXPECT_GT(ones, 500u);
 
@@ -488,8 +489,8 @@ TEST(SplitPasses, HeavyViewLeavesOtherViewsRendering) {
   for (size_t i = 1; i < cheapDone.size(); ++i)
     maxGapMs = std::max(maxGapMs, msBetween(cheapDone[i - 1], cheapDone[i]));
   const FrameStats& last = heavyPasses.back();
-  std::printf("[ heavy ] %.0f ms; its pass %.0f ms in %llu submissions, longest %.1f ms\n", heavyMs,
-              last.lastPassMs, static_cast<unsigned long long>(last.submissions), last.maxSubmissionMs);
+  std::printf("[ heavy ] %.0f ms; its pass %.0f ms in %llu submissions, longest %.1f ms\n", heavyMs, last.lastPassMs,
+              static_cast<unsigned long long>(last.submissions), last.maxSubmissionMs);
   std::printf("[ cheap ] %zu passes meanwhile, longest gap %.1f ms\n", cheapDone.size() - 1, maxGapMs);
   if (last.lastPassMs < 1.2 * kMaxGapMs)
     GTEST_SKIP() << "the heavy pass took only " << last.lastPassMs << " ms on this device: too fast to tell";

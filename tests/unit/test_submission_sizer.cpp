@@ -82,7 +82,7 @@ TEST(SubmissionSizer, ConvergesToTheTargetWhenCostsAreSteady) {
 
 TEST(SubmissionSizer, GrowsAtMostByTheGrowthFactor) {
   SubmissionSizer s;
-  submit(s, 1e-6);  // warm-up
+  submit(s, 1e-6);                    // warm-up
   double previous = submit(s, 1e-6);  // probe
   for (int i = 0; i < 5; ++i) {
     const double units = submit(s, 1e-6);

@@ -63,15 +63,18 @@ size_t occurrences(const std::string& haystack, const std::string& needle) {
 // A file whose line 5 holds `includeLine` and whose BRDF (lines 6-8, `body` on line 7) uses
 // D_GGX by default.
 std::string fileWithInclude(const std::string& includeLine, const std::string& body = "return vec3(D_GGX(0.9, a));") {
-  return "::begin parameters\n"                                    // 1
-         "float a 0.001 1 0.3\n"                                   // 2
-         "::end parameters\n"                                     // 3
-         "::begin shader\n"                                       // 4
-         + includeLine + "\n"                                      // 5
-         "vec3 BRDF(vec3 L, vec3 V, vec3 N, vec3 X, vec3 Y) {\n"   // 6
-         "  " + body + "\n"                                        // 7
-         "}\n"                                                     // 8
-         "::end shader\n";                                         // 9
+  return "::begin parameters\n"   // 1
+         "float a 0.001 1 0.3\n"  // 2
+         "::end parameters\n"     // 3
+         "::begin shader\n"       // 4
+         + includeLine +
+         "\n"                                                     // 5
+         "vec3 BRDF(vec3 L, vec3 V, vec3 N, vec3 X, vec3 Y) {\n"  // 6
+         "  " +
+         body +
+         "\n"               // 7
+         "}\n"              // 8
+         "::end shader\n";  // 9
 }
 
 const Diagnostic& firstError(const Error& e) {
@@ -88,10 +91,10 @@ TEST(TermIncludes, ParsesTheIncludeLine) {
   EXPECT_EQ(ok.path, "terms/d_ggx.glsl");
   for (const char* notInclude : {"#define X 1", "float x;", "#includes \"terms/d_ggx.glsl\"", ""})
     EXPECT_FALSE(parseTermInclude(notInclude).isInclude) << notInclude;
-  for (const char* bad : {"#include \"../d_ggx.glsl\"", "#include \"terms/../bindings.glsl\"",
-                          "#include \"/etc/passwd\"", "#include <terms/d_ggx.glsl>", "#include",
-                          "#include \"terms/D_GGX.glsl\"", "#include \"bindings.glsl\"",
-                          "#include \"terms/.glsl\"", "#include \"terms/a/b.glsl\""}) {
+  for (const char* bad :
+       {"#include \"../d_ggx.glsl\"", "#include \"terms/../bindings.glsl\"", "#include \"/etc/passwd\"",
+        "#include <terms/d_ggx.glsl>", "#include", "#include \"terms/D_GGX.glsl\"", "#include \"bindings.glsl\"",
+        "#include \"terms/.glsl\"", "#include \"terms/a/b.glsl\""}) {
     TermInclude r = parseTermInclude(bad);
     EXPECT_TRUE(r.isInclude) << bad;
     EXPECT_NE(r.error, "") << bad;
@@ -126,21 +129,22 @@ TEST(TermIncludes, IncludeResolvesBeforeTheBrdfTextAndCompiles) {
 
 TEST(TermIncludes, IncludedTwiceIsEmittedOnce) {
   // d_ggx and d_beckmann both include constants.glsl; d_ggx is also named twice.
-  const std::string text = "::begin shader\n"
-                           "#include \"terms/d_ggx.glsl\"\n"
-                           "#include \"terms/d_beckmann.glsl\"\n"
-                           "const float PI = 3.14159265358979323846;\n"
-                           "#include \"terms/d_ggx.glsl\"\n"
-                           "vec3 BRDF(vec3 L, vec3 V, vec3 N, vec3 X, vec3 Y) {\n"
-                           "  return vec3(D_GGX(0.9, 0.3) + D_Beckmann(0.9, 0.3)) / PI;\n"
-                           "}\n"
-                           "::end shader\n"
-                           "::begin sample\n"
-                           "#include \"terms/d_ggx.glsl\"\n"
-                           "vec3 sampleBRDF(vec2 u, vec3 V, vec3 N, vec3 X, vec3 Y, out vec3 L, out float pdf) {\n"
-                           "  L = N; pdf = D_GGX(1.0, 0.3); return BRDF(L, V, N, X, Y);\n"
-                           "}\n"
-                           "::end sample\n";
+  const std::string text =
+      "::begin shader\n"
+      "#include \"terms/d_ggx.glsl\"\n"
+      "#include \"terms/d_beckmann.glsl\"\n"
+      "const float PI = 3.14159265358979323846;\n"
+      "#include \"terms/d_ggx.glsl\"\n"
+      "vec3 BRDF(vec3 L, vec3 V, vec3 N, vec3 X, vec3 Y) {\n"
+      "  return vec3(D_GGX(0.9, 0.3) + D_Beckmann(0.9, 0.3)) / PI;\n"
+      "}\n"
+      "::end shader\n"
+      "::begin sample\n"
+      "#include \"terms/d_ggx.glsl\"\n"
+      "vec3 sampleBRDF(vec2 u, vec3 V, vec3 N, vec3 X, vec3 Y, out vec3 L, out float pdf) {\n"
+      "  L = N; pdf = D_GGX(1.0, 0.3); return BRDF(L, V, N, X, Y);\n"
+      "}\n"
+      "::end sample\n";
   Result<BrdfDefinition> def = parseBrdf(text);
   ASSERT_TRUE(def.ok()) << def.error().message;
   const std::string src = assemble(def.value()).source;
@@ -175,11 +179,12 @@ TEST(TermIncludes, PathsOutsideTheTermsFolderFailOnTheIncludeLine) {
 TEST(TermIncludes, LegacyFileIncludesResolveAndFailOnTheirLine) {
   // A BRDFA Engine file is bare GLSL with no sections (the parser does not look at its lines):
   // the assembler resolves its includes alike and reports a bad one on its line.
-  const std::string legacy = "#include \"terms/f_schlick.glsl\"\n"       // 1
-                             "%s\n"                                      // 2
-                             "vec3 render(vec3 L, vec3 N, vec3 V, vec2 textureCord, mat3 worldToLocal) {\n"
-                             "  return F_Schlick(dot(N, V), vec3(0.04));\n"
-                             "}\n";
+  const std::string legacy =
+      "#include \"terms/f_schlick.glsl\"\n"  // 1
+      "%s\n"                                 // 2
+      "vec3 render(vec3 L, vec3 N, vec3 V, vec2 textureCord, mat3 worldToLocal) {\n"
+      "  return F_Schlick(dot(N, V), vec3(0.04));\n"
+      "}\n";
   auto withLine2 = [&](const std::string& line2) {
     std::string s = legacy;
     return s.replace(s.find("%s"), 2, line2);
@@ -199,24 +204,26 @@ TEST(TermIncludes, LegacyFileIncludesResolveAndFailOnTheirLine) {
 
 TEST(TermIncludes, ErrorsAfterAnIncludeKeepTheUsersLine) {
   // Line 7 names an undeclared identifier; the term's text before it must not shift the line.
-  Result<SpirvBinary> r = compileText(fileWithInclude("#include \"terms/d_ggx.glsl\"", "return vec3(D_GGX(0.9, a) * nope);"));
+  Result<SpirvBinary> r =
+      compileText(fileWithInclude("#include \"terms/d_ggx.glsl\"", "return vec3(D_GGX(0.9, a) * nope);"));
   ASSERT_FALSE(r.ok());
   EXPECT_EQ(firstError(r.error()).line, 7) << firstError(r.error()).message;
   EXPECT_NE(firstError(r.error()).message.find("nope"), std::string::npos);
 
   // The same in a sample section after includes in both sections.
-  const std::string text = "::begin shader\n"                                                      // 1
-                           "#include \"terms/f_schlick.glsl\"\n"                                   // 2
-                           "vec3 BRDF(vec3 L, vec3 V, vec3 N, vec3 X, vec3 Y) { return F_Schlick(0.5, vec3(0.04)); }\n"
-                           "::end shader\n"                                                        // 4
-                           "::begin sample\n"                                                      // 5
-                           "#include \"terms/g_vcavity.glsl\"\n"                                   // 6
-                           "#include \"terms/d_ggx.glsl\"\n"                                       // 7
-                           "vec3 sampleBRDF(vec2 u, vec3 V, vec3 N, vec3 X, vec3 Y, out vec3 L, out float pdf) {\n"
-                           "  L = N; pdf = G_VCavity(1.0, 1.0, 1.0, 1.0);\n"                       // 9
-                           "  return BRDF(L, V, N, X, Y) * missing;\n"                             // 10
-                           "}\n"
-                           "::end sample\n";
+  const std::string text =
+      "::begin shader\n"                     // 1
+      "#include \"terms/f_schlick.glsl\"\n"  // 2
+      "vec3 BRDF(vec3 L, vec3 V, vec3 N, vec3 X, vec3 Y) { return F_Schlick(0.5, vec3(0.04)); }\n"
+      "::end shader\n"                       // 4
+      "::begin sample\n"                     // 5
+      "#include \"terms/g_vcavity.glsl\"\n"  // 6
+      "#include \"terms/d_ggx.glsl\"\n"      // 7
+      "vec3 sampleBRDF(vec2 u, vec3 V, vec3 N, vec3 X, vec3 Y, out vec3 L, out float pdf) {\n"
+      "  L = N; pdf = G_VCavity(1.0, 1.0, 1.0, 1.0);\n"  // 9
+      "  return BRDF(L, V, N, X, Y) * missing;\n"        // 10
+      "}\n"
+      "::end sample\n";
   Result<SpirvBinary> s = compileText(text);
   ASSERT_FALSE(s.ok());
   EXPECT_EQ(firstError(s.error()).line, 10) << firstError(s.error()).message;

@@ -13,8 +13,8 @@
 namespace brdfa {
 
 enum class AssetKind { Mesh, Texture, Environment };
-const char* assetKindName(AssetKind kind);                          // "mesh" | "texture" | "environment"
-bool assetKindFromName(std::string_view name, AssetKind& kind);      // false if unknown
+const char* assetKindName(AssetKind kind);                       // "mesh" | "texture" | "environment"
+bool assetKindFromName(std::string_view name, AssetKind& kind);  // false if unknown
 
 // File formats, told apart by content (magic numbers, OBJ statements), never by a file name.
 enum class AssetFormat { Obj, Png, Jpeg, Hdr, Exr };
@@ -26,19 +26,19 @@ std::optional<AssetFormat> sniffAssetFormat(std::string_view bytes);
 // Upper bounds on what one asset may hold; each is checked before the data is used, and the
 // pixel bound before an image is decoded (from its header).
 struct AssetLimits {
-  uint64_t maxBytes = 64ull << 20;       // encoded file size
-  uint64_t maxTriangles = 2'000'000;     // after polygons are split into triangles
-  uint64_t maxPixels = 4096ull * 4096;   // width * height of a texture or environment image
+  uint64_t maxBytes = 64ull << 20;      // encoded file size
+  uint64_t maxTriangles = 2'000'000;    // after polygons are split into triangles
+  uint64_t maxPixels = 4096ull * 4096;  // width * height of a texture or environment image
 };
 
 // What inspectAsset found. Meshes fill vertices/triangles/shapes; images width/height.
 struct AssetInfo {
   AssetKind kind = AssetKind::Mesh;
   AssetFormat format = AssetFormat::Obj;
-  std::string layout;         // environments: "equirect" (HDR, EXR) | "cross" (PNG, JPEG)
-  uint64_t vertices = 0;      // after de-duplication of (position, normal, uv) triples
+  std::string layout;     // environments: "equirect" (HDR, EXR) | "cross" (PNG, JPEG)
+  uint64_t vertices = 0;  // after de-duplication of (position, normal, uv) triples
   uint64_t triangles = 0;
-  uint64_t shapes = 0;        // OBJ o/g groups holding faces
+  uint64_t shapes = 0;             // OBJ o/g groups holding faces
   bool generatedNormals = false;   // the OBJ had none: smooth normals were computed
   bool generatedTangents = false;  // no texture coordinates: a stable fallback frame was used
   int width = 0, height = 0;

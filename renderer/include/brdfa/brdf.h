@@ -19,10 +19,10 @@ const char* paramTypeName(ParamType type);
 struct BrdfParam {
   std::string name;
   ParamType type = ParamType::Float;
-  float min = 0.0f;         // Float only; Color is 0..1, Bool is 0|1
+  float min = 0.0f;  // Float only; Color is 0..1, Bool is 0|1
   float max = 1.0f;
   Vec3 defaultValue{0, 0, 0};  // Float and Bool use [0]
-  int line = 0;             // 1-based line in the file
+  int line = 0;                // 1-based line in the file
 };
 
 enum class BrdfFormat { Explorer, Legacy };
@@ -33,7 +33,7 @@ enum class BrdfFormat { Explorer, Legacy };
 // (names separated by commas or spaces; "none" claims nothing). A property not claimed is
 // still measured and reported, never failed.
 struct BrdfClaims {
-  bool declared = false;  // the file has a claims line
+  bool declared = false;            // the file has a claims line
   bool reciprocity = false;         // f(L, V) = f(V, L)
   bool energyConservation = false;  // directional albedo <= 1 at every view
   bool nonNegativity = false;       // every channel >= 0
@@ -45,9 +45,9 @@ struct BrdfClaims {
 struct BrdfDefinition {
   BrdfFormat format = BrdfFormat::Explorer;
   std::vector<BrdfParam> params;
-  std::string shader;          // body of `::begin shader` (defines vec3 BRDF(L, V, N, X, Y))
-  int shaderFirstLine = 0;     // file line of the first line of `shader`
-  std::string sampleShader;    // body of `::begin sample`, empty when absent
+  std::string shader;        // body of `::begin shader` (defines vec3 BRDF(L, V, N, X, Y))
+  int shaderFirstLine = 0;   // file line of the first line of `shader`
+  std::string sampleShader;  // body of `::begin sample`, empty when absent
   int sampleFirstLine = 0;
   std::vector<Diagnostic> warnings;  // e.g. an ignored `isFunc` section
   BrdfClaims claims;

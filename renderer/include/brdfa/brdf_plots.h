@@ -38,10 +38,10 @@ bool plotKindFromName(const std::string& name, PlotKind& kind);
 
 struct PlotRequest {
   PlotKind kind = PlotKind::Polar;
-  double thetaIDeg = 30;  // polar, lobe: 0..89.9
-  bool cosine = false;    // polar, lobe: f (N.V) instead of f
-  int resolution = 0;     // points per axis; 0 takes the kind's default (defaultResolution)
-  double phiDDeg = 90;    // slice
+  double thetaIDeg = 30;        // polar, lobe: 0..89.9
+  bool cosine = false;          // polar, lobe: f (N.V) instead of f
+  int resolution = 0;           // points per axis; 0 takes the kind's default (defaultResolution)
+  double phiDDeg = 90;          // slice
   std::vector<double> viewDeg;  // albedo: 0..89.9; empty takes 0, 5, ..., 85, 89
   uint32_t samples = 32768;     // albedo: per view, at least 2048
 };

@@ -34,9 +34,9 @@ struct FrameDifference {
   // (different render.seed): the correction assumes their noise does not correlate.
   double relRms = 0;
   double relRmsError = 0;
-  double rawRelRms = 0;    // the same without the noise correction
-  double noiseFloor = 0;   // sqrt(sA^2 + sB^2) / mean(A): the per-pixel noise, relative
-  uint64_t pixels = 0;     // P
+  double rawRelRms = 0;   // the same without the noise correction
+  double noiseFloor = 0;  // sqrt(sA^2 + sB^2) / mean(A): the per-pixel noise, relative
+  uint64_t pixels = 0;    // P
 };
 
 // `a` and `b` are linear frames (Frame::rgba32f) of equal size, with their stats (the

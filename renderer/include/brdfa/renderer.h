@@ -22,9 +22,9 @@ namespace brdfa {
 enum class ResolveMode { Auto, Device, Host };  // Auto: Host on CPU devices, Device on GPUs
 
 struct RendererOptions {
-  std::string deviceName;  // substring of the device name to pick; empty = prefer a real GPU
-  std::string shaderDir;   // directory holding shaders/lib and shaders/kernels
-  bool validation = false; // enable VK_LAYER_KHRONOS_validation when present
+  std::string deviceName;   // substring of the device name to pick; empty = prefer a real GPU
+  std::string shaderDir;    // directory holding shaders/lib and shaders/kernels
+  bool validation = false;  // enable VK_LAYER_KHRONOS_validation when present
   ResolveMode resolve = ResolveMode::Auto;
   // Device time one queue submission of a pass aims at: a pass is split into submissions of
   // about this length, so a heavy scene cannot hold the shared queue for long.
@@ -48,7 +48,7 @@ struct RendererOptions {
   // it the compile fails with a CompileError naming the budget.
   double compileSeconds = 5.0;
   size_t compileMemoryMiB = 1024;  // RSS of one compile worker (MemoryUse::Compiles counts them at it)
-  size_t compileWorkers = 0;  // at once; 0: one per core, at least 2
+  size_t compileWorkers = 0;       // at once; 0: one per core, at least 2
   // Memory the renderer may take in all (RendererCounters::memory): the device process as it
   // starts (counted once more for each of spareProcesses, idle copies of it kept ready), render
   // targets and G-buffers of every view, meshes, textures and environments on the device,
@@ -91,37 +91,37 @@ struct CompileInfo {
 // Where the latest pass's time went, with RendererOptions::profilePasses (else all 0). Device
 // phases are host-timed submissions (lavapipe's timestamps read ~0 for long dispatches).
 struct PassBreakdown {
-  double setupMs = 0;        // raster of pending G-buffer slices, clears, the once-per-restart background
-  double shadeMs = 0;        // the objects' shade kernels
-  double edgeMs = 0;         // background samples of edge pixels (anti-aliasing)
-  double resolveMs = 0;      // the error estimate's resolve, on the device or the host
-  double otherMs = 0;        // the rest of the pass's wall time: recording, submission, fence waits
+  double setupMs = 0;    // raster of pending G-buffer slices, clears, the once-per-restart background
+  double shadeMs = 0;    // the objects' shade kernels
+  double edgeMs = 0;     // background samples of edge pixels (anti-aliasing)
+  double resolveMs = 0;  // the error estimate's resolve, on the device or the host
+  double otherMs = 0;    // the rest of the pass's wall time: recording, submission, fence waits
 };
 
 struct FrameStats {
-  uint64_t spp = 0;           // samples per pixel accumulated since the last scene change
-  uint64_t passes = 0;        // progressive passes since the last scene change
-  double elapsedMs = 0;       // render time spent since the last scene change
-  double lastPassMs = 0;      // wall time of the latest pass
+  uint64_t spp = 0;       // samples per pixel accumulated since the last scene change
+  uint64_t passes = 0;    // progressive passes since the last scene change
+  double elapsedMs = 0;   // render time spent since the last scene change
+  double lastPassMs = 0;  // wall time of the latest pass
   // The latest pass's queue submissions (RendererOptions::submissionTargetMs) and the device
   // time of its longest one (wall time from submit to done where the queue has no timestamps).
   uint64_t submissions = 0;
   double maxSubmissionMs = 0;
-  PassBreakdown breakdown;    // of the latest pass, with RendererOptions::profilePasses
-  uint64_t nanSamples = 0;    // NaN/Inf samples dropped since the last scene change
+  PassBreakdown breakdown;  // of the latest pass, with RendererOptions::profilePasses
+  uint64_t nanSamples = 0;  // NaN/Inf samples dropped since the last scene change
   // Relative RMS error of the image, estimated from two statistically independent half
   // accumulators: sqrt(mean over object pixels of the mean's variance) / mean luminance.
   std::optional<double> relError;
-  uint64_t relErrorSpp = 0;        // spp when relError was last measured (refreshed every ~200 ms)
+  uint64_t relErrorSpp = 0;  // spp when relError was last measured (refreshed every ~200 ms)
   // The pixels relError was measured over (covered by an object, with samples in both halves)
   // and their mean luminance, at the same moment: relError * meanLuminance is the RMS standard
   // error of those pixels (a difference of two images needs it, frame_difference.h).
   uint64_t errorPixels = 0;
   double errorMeanLuminance = 0;
-  double relErrorElapsedMs = 0;    // elapsedMs at that moment
+  double relErrorElapsedMs = 0;  // elapsedMs at that moment
   uint64_t vertices = 0;
   uint64_t triangles = 0;
-  uint64_t programBytes = 0;  // SPIR-V size of the scene's distinct shading programs
+  uint64_t programBytes = 0;       // SPIR-V size of the scene's distinct shading programs
   bool converged = false;          // rel_error <= render.target_error (never without a target)
   bool maxSamplesReached = false;  // spp reached render.max_samples
   bool done() const { return converged || maxSamplesReached; }  // no more passes will run
@@ -222,14 +222,14 @@ struct MemoryUsage {
 // Work the renderer has done since it started: what tests and operators use to see that a
 // change did (or did not) compile anything.
 struct RendererCounters {
-  uint64_t glslCompiles = 0;     // GLSL -> SPIR-V runs (SPIR-V cache misses)
-  uint64_t glslCompileErrors = 0;  // of those, the ones that failed (error, time or memory limit)
-  DurationHistogram compileTime;   // wall time of each of those runs
-  uint64_t spirvCacheHits = 0;    // from memory
-  uint64_t spirvDiskHits = 0;     // from the disk cache
-  uint64_t pipelinesCreated = 0; // shading pipelines built (each costs a driver JIT)
-  MemoryUsage memory;             // now, against RendererOptions::memoryBudgetBytes
-  uint64_t workerRestarts = 0;    // isolated renderers: render workers killed and replaced
+  uint64_t glslCompiles = 0;         // GLSL -> SPIR-V runs (SPIR-V cache misses)
+  uint64_t glslCompileErrors = 0;    // of those, the ones that failed (error, time or memory limit)
+  DurationHistogram compileTime;     // wall time of each of those runs
+  uint64_t spirvCacheHits = 0;       // from memory
+  uint64_t spirvDiskHits = 0;        // from the disk cache
+  uint64_t pipelinesCreated = 0;     // shading pipelines built (each costs a driver JIT)
+  MemoryUsage memory;                // now, against RendererOptions::memoryBudgetBytes
+  uint64_t workerRestarts = 0;       // isolated renderers: render workers killed and replaced
   uint64_t quarantinedPrograms = 0;  // isolated renderers: programs refused since (see RendererOptions)
 
   // Isolated renderers: the requests to the render worker since start, per operation
@@ -264,7 +264,7 @@ struct RendererCounters {
 // One property a file may claim (BrdfClaims), as checked: measured always, failed only when
 // claimed.
 struct ClaimVerdict {
-  std::string name;      // "reciprocity" | "energy-conservation" | "non-negativity"
+  std::string name;  // "reciprocity" | "energy-conservation" | "non-negativity"
   bool claimed = false;
   bool holds = true;     // the measurement is within the property's limit (below)
   std::string measured;  // the figure and its worst case, for a person
@@ -285,19 +285,19 @@ struct BrdfCheckReport {
   uint64_t evaluations = 0;
   uint64_t nanCount = 0;
   uint64_t infCount = 0;
-  uint64_t negativeCount = 0;       // any channel < 0
-  double maxAlbedo = 0;             // largest directional albedo over view angles and settings
-  double maxAlbedoStdError = 0;     // its standard error
-  uint64_t albedoAboveOne = 0;      // (view angle, setting) pairs whose albedo is significantly > 1
-  double maxReciprocityError = 0;   // max |f(L,V) - f(V,L)| / max(|f(L,V)|, |f(V,L)|, 1e-6)
-  uint64_t leftOut = 0;             // (L, V) pairs of measure zero not evaluated: L = -V on the horizon
+  uint64_t negativeCount = 0;      // any channel < 0
+  double maxAlbedo = 0;            // largest directional albedo over view angles and settings
+  double maxAlbedoStdError = 0;    // its standard error
+  uint64_t albedoAboveOne = 0;     // (view angle, setting) pairs whose albedo is significantly > 1
+  double maxReciprocityError = 0;  // max |f(L,V) - f(V,L)| / max(|f(L,V)|, |f(V,L)|, 1e-6)
+  uint64_t leftOut = 0;            // (L, V) pairs of measure zero not evaluated: L = -V on the horizon
   // Where the worst case of each finding is, for a person: the parameter setting, the view and
   // light directions (polar angle from N, azimuth from X) and the values. Empty when none.
-  std::string worstReciprocity;     // where maxReciprocityError was found (when > 0)
-  std::string firstBadValue;        // the first NaN, Inf or negative value met
-  std::string worstAlbedo;          // where maxAlbedo was found, with its standard error
-  std::vector<ClaimVerdict> claims; // the three properties, in the order above
-  double ms = 0;                    // wall time of the check
+  std::string worstReciprocity;      // where maxReciprocityError was found (when > 0)
+  std::string firstBadValue;         // the first NaN, Inf or negative value met
+  std::string worstAlbedo;           // where maxAlbedo was found, with its standard error
+  std::vector<ClaimVerdict> claims;  // the three properties, in the order above
+  double ms = 0;                     // wall time of the check
   bool ok() const {
     if (nanCount != 0 || infCount != 0) return false;
     for (const ClaimVerdict& c : claims)
@@ -341,7 +341,7 @@ struct SamplerConfigResult {
   uint64_t rejected = 0;
   double maxValueMismatch = 0, maxCellZ = 0, albedoZ = 0, maxPdfMismatch = 0, maxLengthError = 0;
   uint64_t pdfBelowHorizon = 0;
-  double chi2PValue = 1;            // 1 when the chi-square test did not run
+  double chi2PValue = 1;  // 1 when the chi-square test did not run
   std::string chi2Failure;
   std::string worstCheck;
   double worstValue = 0, worstSeverity = 0;
@@ -349,20 +349,20 @@ struct SamplerConfigResult {
 
 struct SamplerCheckReport {
   uint64_t samples = 0;
-  uint64_t rejected = 0;          // pdf = 0, or L on or below the horizon
-  double maxValueMismatch = 0;    // max relative |returned f - BRDF(L, V)|
-  uint32_t cellsTested = 0;       // cells with enough samples to test
-  double maxCellZ = 0;            // largest |z| of a cell's solid-angle estimate
-  double maxAlbedoZ = 0;          // largest |z| of sampled vs cosine albedo over the configurations
-  bool chi2Run = false;           // the file defines pdfBRDF; the fields below are then set
-  double minChi2PValue = 1;       // smallest p-value over the configurations (0: a test could not run, see chi2Failure)
+  uint64_t rejected = 0;        // pdf = 0, or L on or below the horizon
+  double maxValueMismatch = 0;  // max relative |returned f - BRDF(L, V)|
+  uint32_t cellsTested = 0;     // cells with enough samples to test
+  double maxCellZ = 0;          // largest |z| of a cell's solid-angle estimate
+  double maxAlbedoZ = 0;        // largest |z| of sampled vs cosine albedo over the configurations
+  bool chi2Run = false;         // the file defines pdfBRDF; the fields below are then set
+  double minChi2PValue = 1;     // smallest p-value over the configurations (0: a test could not run, see chi2Failure)
   std::vector<double> chi2PValues;  // per configuration (in `configs` order) when run
-  double chi2Threshold = 0;       // per-configuration significance: 0.01, Sidak-corrected over the configurations
-  double maxPdfMismatch = 0;      // max relative |returned pdf - pdfBRDF(L, V)| over accepted samples
-  std::string chi2Failure;        // why a configuration's test failed outright (a sample where
-                                  // pdfBRDF integrates to 0, a bad expected count); empty otherwise
-  double maxLengthError = 0;      // max | |L| - 1 | over draws with pdf > 0
-  uint64_t pdfBelowHorizon = 0;   // draws with pdf > 0 and N.L <= 0
+  double chi2Threshold = 0;         // per-configuration significance: 0.01, Sidak-corrected over the configurations
+  double maxPdfMismatch = 0;        // max relative |returned pdf - pdfBRDF(L, V)| over accepted samples
+  std::string chi2Failure;          // why a configuration's test failed outright (a sample where
+                                    // pdfBRDF integrates to 0, a bad expected count); empty otherwise
+  double maxLengthError = 0;        // max | |L| - 1 | over draws with pdf > 0
+  uint64_t pdfBelowHorizon = 0;     // draws with pdf > 0 and N.L <= 0
   uint32_t configurations = 0;
   uint64_t samplesPerConfiguration = 0;
   std::vector<SamplerConfigResult> configs;
@@ -371,8 +371,8 @@ struct SamplerCheckReport {
   size_t worstConfig = 0;
   std::string worstCheck;
   double worstValue = 0, worstSeverity = 0;
-  std::string worst;              // "normal near +z (1e-3 rad) (..), view 60 deg at azimuth 45 deg: length 4.3e-04 (limit 1e-04)"
-  double ms = 0;                  // wall time of the check
+  std::string worst;  // "normal near +z (1e-3 rad) (..), view 60 deg at azimuth 45 deg: length 4.3e-04 (limit 1e-04)"
+  double ms = 0;      // wall time of the check
 
   static constexpr double kValueLimit = 1e-3, kPdfLimit = 1e-3, kLengthLimit = 1e-4;
   bool chi2Passed() const { return !chi2Run || (minChi2PValue >= chi2Threshold && maxPdfMismatch < kPdfLimit); }
@@ -398,9 +398,9 @@ struct EnvironmentSamplerReport {
   double cellChi2PValue = 0;
   double positionChi2PValue = 0;
   double maxSolidAngleZ = 0;
-  uint32_t solidAngleBins = 0;  // bins the z-scores covered
-  double maxPdfMismatch = 0;   // largest relative |returned - brdfa_environmentPdf| (device)
-  double hostPdfMismatch = 0;  // largest relative |returned - the host's EnvironmentDistribution::pdf|
+  uint32_t solidAngleBins = 0;     // bins the z-scores covered
+  double maxPdfMismatch = 0;       // largest relative |returned - brdfa_environmentPdf| (device)
+  double hostPdfMismatch = 0;      // largest relative |returned - the host's EnvironmentDistribution::pdf|
   double pdfMismatchFraction = 0;  // draws off by more than 1e-3 (a cell edge rounded onto its neighbour)
   double maxLengthError = 0;
   std::string failure;  // why a chi-square test could not run

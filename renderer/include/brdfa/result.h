@@ -51,7 +51,7 @@ int errorHttpStatus(ErrorCode code);
 // 0 means the message is not attributable to a line of the submitted text.
 struct Diagnostic {
   int line = 0;
-  int column = 0;  // 0 when unknown
+  int column = 0;                  // 0 when unknown
   std::string severity = "error";  // "error" | "warning"
   std::string message;
 };
@@ -59,8 +59,8 @@ struct Diagnostic {
 struct Error {
   ErrorCode code = ErrorCode::Internal;
   std::string message;
-  std::string field;                     // offending input field, e.g. "objects[0].params.Kd"
-  std::vector<Diagnostic> diagnostics;   // for CompileError
+  std::string field;                    // offending input field, e.g. "objects[0].params.Kd"
+  std::vector<Diagnostic> diagnostics;  // for CompileError
 };
 
 inline Error makeError(ErrorCode code, std::string message, std::string field = {}) {

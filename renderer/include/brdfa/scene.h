@@ -14,9 +14,9 @@ namespace brdfa {
 
 struct Camera {
   Vec3 position{0, 0, 3};
-  float yaw = 0;     // degrees, about +Y; 0 looks down -Z
-  float pitch = 0;   // degrees, about the camera's X axis; positive looks up
-  float fov = 45;    // vertical field of view, degrees
+  float yaw = 0;    // degrees, about +Y; 0 looks down -Z
+  float pitch = 0;  // degrees, about the camera's X axis; positive looks up
+  float fov = 45;   // vertical field of view, degrees
 };
 
 struct EnvironmentSettings {
@@ -46,8 +46,8 @@ bool samplingModeFromName(const std::string& name, SamplingMode& mode);  // fals
 //   Reinhard: e / (1 + e), per channel (Reinhard et al. 2002, eq. 3);
 //   Aces:     Narkowicz's 2015 fit of the ACES filmic curve, per channel.
 enum class ToneMap { Clamp, Reinhard, Aces };
-const char* toneMapName(ToneMap toneMap);                           // "clamp" | "reinhard" | "aces"
-bool toneMapFromName(const std::string& name, ToneMap& toneMap);    // false if unknown
+const char* toneMapName(ToneMap toneMap);                         // "clamp" | "reinhard" | "aces"
+bool toneMapFromName(const std::string& name, ToneMap& toneMap);  // false if unknown
 
 struct RenderSettings {
   int width = 512;
@@ -94,8 +94,8 @@ inline constexpr int kMaxTextures = 4;
 struct SceneObject {
   std::string mesh = "sphere";
   std::shared_ptr<const BrdfDefinition> brdf;  // required
-  std::string brdfName;                         // for reports only
-  std::map<std::string, Vec3> params;           // missing names take the file's defaults
+  std::string brdfName;                        // for reports only
+  std::map<std::string, Vec3> params;          // missing names take the file's defaults
   Vec3 translate{0, 0, 0};
   Vec3 rotate{0, 0, 0};  // degrees, applied X then Y then Z
   Vec3 scale{1, 1, 1};

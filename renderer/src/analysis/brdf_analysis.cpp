@@ -49,9 +49,12 @@ Result<std::vector<Vec3>> evaluateBrdf(const CheckDevice& device, const BrdfDefi
   }
   std::vector<Vec3> values;
   values.reserve(size_t(n) * settings.size());
-  auto ran = runCheckKernel(device, brdf, "analysis.comp.glsl", n, n, settings, [&](const float* out) {
-    for (uint32_t p = 0; p < n; ++p) values.push_back({out[4 * p], out[4 * p + 1], out[4 * p + 2]});
-  }, input);
+  auto ran = runCheckKernel(
+      device, brdf, "analysis.comp.glsl", n, n, settings,
+      [&](const float* out) {
+        for (uint32_t p = 0; p < n; ++p) values.push_back({out[4 * p], out[4 * p + 1], out[4 * p + 2]});
+      },
+      input);
   if (!ran) return ran.takeError();
   return values;
 }
@@ -62,36 +65,40 @@ Result<std::vector<AlbedoEstimate>> estimateAlbedo(const CheckDevice& device, co
   if (views.empty() || settings.empty()) return std::vector<AlbedoEstimate>{};
   // Two replicates at least: their spread is the error bar.
   const uint32_t chunks = std::clamp<uint32_t>((samplesPerView + kChunkSamples - 1) / kChunkSamples, 2, kMaxReplicates);
-  const uint32_t viewsPerCall = static_cast<uint32_t>(std::max<uint64_t>(1, kSubmissionSamples / (uint64_t(chunks) * kChunkSamples)));
+  const uint32_t viewsPerCall =
+      static_cast<uint32_t>(std::max<uint64_t>(1, kSubmissionSamples / (uint64_t(chunks) * kChunkSamples)));
   std::vector<AlbedoEstimate> out(settings.size() * views.size());
   for (size_t first = 0; first < views.size(); first += viewsPerCall) {
     const uint32_t count = static_cast<uint32_t>(std::min<size_t>(viewsPerCall, views.size() - first));
     std::vector<float> input = header(1, count, kChunkSamples, chunks);
     for (uint32_t v = 0; v < count; ++v) append(input, views[first + v]);
     size_t setting = 0;
-    auto ran = runCheckKernel(device, brdf, "analysis.comp.glsl", count * chunks, count * chunks, settings, [&](const float* o) {
-      for (uint32_t v = 0; v < count; ++v) {
-        double sum[3] = {0, 0, 0}, sumSq[3] = {0, 0, 0};
-        AlbedoEstimate& e = out[setting * views.size() + first + v];
-        for (uint32_t c = 0; c < chunks; ++c) {
-          const float* r = o + 4 * size_t(v * chunks + c);
-          for (int k = 0; k < 3; ++k) {
-            const double m = double(r[k]) / kChunkSamples;
-            sum[k] += m;
-            sumSq[k] += m * m;
+    auto ran = runCheckKernel(
+        device, brdf, "analysis.comp.glsl", count * chunks, count * chunks, settings,
+        [&](const float* o) {
+          for (uint32_t v = 0; v < count; ++v) {
+            double sum[3] = {0, 0, 0}, sumSq[3] = {0, 0, 0};
+            AlbedoEstimate& e = out[setting * views.size() + first + v];
+            for (uint32_t c = 0; c < chunks; ++c) {
+              const float* r = o + 4 * size_t(v * chunks + c);
+              for (int k = 0; k < 3; ++k) {
+                const double m = double(r[k]) / kChunkSamples;
+                sum[k] += m;
+                sumSq[k] += m * m;
+              }
+              e.nonFinite += static_cast<uint64_t>(r[3]);
+            }
+            for (int k = 0; k < 3; ++k) {
+              const double mean = sum[k] / chunks;
+              const double var = std::max(sumSq[k] / chunks - mean * mean, 0.0) * chunks / (chunks - 1.0);
+              e.mean[k] = float(mean);
+              e.stdError[k] = float(std::sqrt(var / chunks));
+            }
+            e.samples = uint64_t(chunks) * kChunkSamples;
           }
-          e.nonFinite += static_cast<uint64_t>(r[3]);
-        }
-        for (int k = 0; k < 3; ++k) {
-          const double mean = sum[k] / chunks;
-          const double var = std::max(sumSq[k] / chunks - mean * mean, 0.0) * chunks / (chunks - 1.0);
-          e.mean[k] = float(mean);
-          e.stdError[k] = float(std::sqrt(var / chunks));
-        }
-        e.samples = uint64_t(chunks) * kChunkSamples;
-      }
-      ++setting;
-    }, input);
+          ++setting;
+        },
+        input);
     if (!ran) return ran.takeError();
   }
   return out;

@@ -95,8 +95,8 @@ Result<BrdfCheckReport> checkBrdf(const CheckDevice& device, const BrdfDefinitio
       if (std::isfinite(albedo[0]) && albedo[0] > report.maxAlbedo) {
         report.maxAlbedo = albedo[0];
         report.maxAlbedoStdError = albedo[1];
-        report.worstAlbedo = number(albedo[0]) + " +- " + number(albedo[1]) + " (standard error) at " + view +
-                             ", " + where;
+        report.worstAlbedo =
+            number(albedo[0]) + " +- " + number(albedo[1]) + " (standard error) at " + view + ", " + where;
       }
       // Only a significant excess counts: the estimate's own error bar says how far it may be
       // off (BrdfCheckReport's limits).

@@ -39,17 +39,18 @@ Result<void> invalid(const std::string& field, const std::string& message) {
 }  // namespace
 
 Result<void> checkPlotRequest(const PlotRequest& r) {
-  if (r.resolution != 0 && r.kind != PlotKind::Albedo &&
-      (r.resolution < 3 || r.resolution > maxResolution(r.kind)))
+  if (r.resolution != 0 && r.kind != PlotKind::Albedo && (r.resolution < 3 || r.resolution > maxResolution(r.kind)))
     return invalid("resolution", "must be 3.." + std::to_string(maxResolution(r.kind)) + " for a " +
-                   plotKindName(r.kind) + " plot (0 takes " + std::to_string(defaultResolution(r.kind)) + ")");
+                                     plotKindName(r.kind) + " plot (0 takes " +
+                                     std::to_string(defaultResolution(r.kind)) + ")");
   if (!(r.thetaIDeg >= 0 && r.thetaIDeg <= kMaxThetaDeg)) return invalid("theta_i", "must be 0..89.9 degrees");
   if (!std::isfinite(r.phiDDeg)) return invalid("phi_d", "must be a number of degrees");
   if (r.viewDeg.size() > kMaxViews) return invalid("theta_v", "at most " + std::to_string(kMaxViews) + " angles");
   for (double v : r.viewDeg)
     if (!(v >= 0 && v <= kMaxThetaDeg)) return invalid("theta_v", "every angle must be 0..89.9 degrees");
   if (r.samples < kMinAlbedoSamples || r.samples > kMaxAlbedoSamples)
-    return invalid("samples", "must be " + std::to_string(kMinAlbedoSamples) + ".." + std::to_string(kMaxAlbedoSamples));
+    return invalid("samples",
+                   "must be " + std::to_string(kMinAlbedoSamples) + ".." + std::to_string(kMaxAlbedoSamples));
   return {};
 }
 

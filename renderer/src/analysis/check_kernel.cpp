@@ -71,7 +71,8 @@ Result<void> runCheckKernel(const CheckDevice& device, const BrdfDefinition& brd
   VkDescriptorBufferInfo inInfo{input.empty() ? output->handle() : inputBuffer.handle(), 0, VK_WHOLE_SIZE};
   VkDescriptorBufferInfo paramInfo{params->handle(), 0, VK_WHOLE_SIZE};
   if (!env) env = furnace->get();
-  VkDescriptorImageInfo envInfo{device.assets.environmentSampler(), env->cube.view(), VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL};
+  VkDescriptorImageInfo envInfo{device.assets.environmentSampler(), env->cube.view(),
+                                VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL};
   const VkBufferView tableView = env->table.view();
   std::vector<VkWriteDescriptorSet> writes;
   for (uint32_t binding : {0u, 3u, 4u, 6u, 7u, 8u, 12u})

@@ -9,9 +9,9 @@ namespace brdfa {
 
 namespace {
 
-constexpr double kEps = 1e-15;        // relative size of the last term / factor kept
+constexpr double kEps = 1e-15;          // relative size of the last term / factor kept
 constexpr int kMaxIterations = 100000;  // the series needs ~sqrt(a) * 10 terms near x = a; far more than enough
-constexpr double kTiny = 1e-300;      // Lentz's stand-in for a zero denominator
+constexpr double kTiny = 1e-300;        // Lentz's stand-in for a zero denominator
 
 // log(x^a e^-x / Gamma(a)), the common prefactor of both expansions.
 double logPrefactor(double a, double x) { return a * std::log(x) - x - std::lgamma(a); }

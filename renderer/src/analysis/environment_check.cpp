@@ -33,8 +33,9 @@ Result<EnvironmentSamplerReport> checkEnvironmentSampler(const CheckDevice& devi
   if (!env) return env.takeError();
   const std::shared_ptr<const EnvironmentDistribution> dist = (*env)->distribution;
   if (!dist)
-    return makeError(ErrorCode::NotFound, "environment '" + name + "' is constant: it has no table and is sampled "
-                                          "uniformly over the sphere");
+    return makeError(ErrorCode::NotFound, "environment '" + name +
+                                              "' is constant: it has no table and is sampled "
+                                              "uniformly over the sphere");
   auto carrier = parseBrdf(kCarrier);
   if (!carrier) return carrier.takeError();
   std::vector<float> draws;
@@ -46,7 +47,8 @@ Result<EnvironmentSamplerReport> checkEnvironmentSampler(const CheckDevice& devi
   const uint32_t D = dist->cellsPerEdge;
   const uint32_t blocksPerEdge = (D + kBlock - 1) / kBlock;
   const std::vector<double> cellP = dist->realisedCellProbabilities();
-  std::vector<double> blockObserved(size_t(6) * blocksPerEdge * blocksPerEdge, 0.0), blockExpected(blockObserved.size(), 0.0);
+  std::vector<double> blockObserved(size_t(6) * blocksPerEdge * blocksPerEdge, 0.0),
+      blockExpected(blockObserved.size(), 0.0);
   for (size_t c = 0; c < cellP.size(); ++c) {
     const uint32_t face = uint32_t(c / (size_t(D) * D)), in = uint32_t(c % (size_t(D) * D));
     const uint32_t bx = (in % D) / kBlock, by = (in / D) / kBlock;
@@ -65,9 +67,9 @@ Result<EnvironmentSamplerReport> checkEnvironmentSampler(const CheckDevice& devi
     const float* b = a + 4;
     const float dir[3] = {a[0], a[1], a[2]};
     const double pdf = a[3];
-    report.maxLengthError =
-        std::max(report.maxLengthError, std::abs(std::sqrt(double(dir[0]) * dir[0] + double(dir[1]) * dir[1] +
-                                                            double(dir[2]) * dir[2]) - 1.0));
+    report.maxLengthError = std::max(
+        report.maxLengthError,
+        std::abs(std::sqrt(double(dir[0]) * dir[0] + double(dir[1]) * dir[1] + double(dir[2]) * dir[2]) - 1.0));
     const double device = b[0], host = dist->pdf(dir);
     const double mismatch = std::max(std::abs(device - pdf), std::abs(host - pdf)) / pdf;
     report.maxPdfMismatch = std::max(report.maxPdfMismatch, std::abs(device - pdf) / pdf);
@@ -98,7 +100,8 @@ Result<EnvironmentSamplerReport> checkEnvironmentSampler(const CheckDevice& devi
   ChiSquareResult cells = chiSquareTest(blockObserved, blockExpected);
   report.cellChi2PValue = cells.pValue;
   if (!cells.failure.empty()) report.failure = "cells: " + cells.failure;
-  ChiSquareResult positions = chiSquareTest(subObserved, std::vector<double>(subObserved.size(), double(kDraws) / subObserved.size()));
+  ChiSquareResult positions =
+      chiSquareTest(subObserved, std::vector<double>(subObserved.size(), double(kDraws) / subObserved.size()));
   report.positionChi2PValue = positions.pValue;
   if (!positions.failure.empty()) report.failure += "positions: " + positions.failure;
   // E[1_bin / pdf] over all draws = the bin's solid angle 4 pi / bins; its standard error from

@@ -246,13 +246,20 @@ void addConfig(SamplerCheckReport& report, SamplerConfigResult r) {
 std::string describeWorst(const SamplerCheckReport& report) {
   const SamplerConfigResult& w = report.configs[report.worstConfig];
   std::string limit;
-  if (w.worstCheck == "value") limit = formatG(SamplerCheckReport::kValueLimit);
-  else if (w.worstCheck == "cell z" || w.worstCheck == "albedo z") limit = formatG(kZLimit);
-  else if (w.worstCheck == "length") limit = formatG(SamplerCheckReport::kLengthLimit);
-  else if (w.worstCheck == "pdf mismatch") limit = formatG(SamplerCheckReport::kPdfLimit);
-  else if (w.worstCheck == "chi2") limit = "p >= " + formatG(report.chi2Threshold);
-  else limit = "0";
-  std::string worst = w.config.describe() + ": " + w.worstCheck + " " + formatG(w.worstValue) + " (limit " + limit + ")";
+  if (w.worstCheck == "value")
+    limit = formatG(SamplerCheckReport::kValueLimit);
+  else if (w.worstCheck == "cell z" || w.worstCheck == "albedo z")
+    limit = formatG(kZLimit);
+  else if (w.worstCheck == "length")
+    limit = formatG(SamplerCheckReport::kLengthLimit);
+  else if (w.worstCheck == "pdf mismatch")
+    limit = formatG(SamplerCheckReport::kPdfLimit);
+  else if (w.worstCheck == "chi2")
+    limit = "p >= " + formatG(report.chi2Threshold);
+  else
+    limit = "0";
+  std::string worst =
+      w.config.describe() + ": " + w.worstCheck + " " + formatG(w.worstValue) + " (limit " + limit + ")";
   if (w.worstCheck == "chi2" && !w.chi2Failure.empty()) worst += ", " + w.chi2Failure;
   return worst;
 }
@@ -294,11 +301,13 @@ Result<SamplerCheckReport> checkSampler(const CheckDevice& device, const BrdfDef
       for (int j = 0; j < 3; ++j) input[4 + 16 * c + 4 * k + j] = (*vectors[k])[j];
   }
 
-  auto ran = runCheckKernel(device, brdf, "check_sampler.comp.glsl", invocations, outputVec4s, {{}},
-                            [&](const float* out) {
-                              for (uint32_t ci = 0; ci < nConfigs; ++ci)
-                                addConfig(report, measureConfig(out, ci, samplingInvocations, configs[ci], report));
-                            }, input);
+  auto ran = runCheckKernel(
+      device, brdf, "check_sampler.comp.glsl", invocations, outputVec4s, {{}},
+      [&](const float* out) {
+        for (uint32_t ci = 0; ci < nConfigs; ++ci)
+          addConfig(report, measureConfig(out, ci, samplingInvocations, configs[ci], report));
+      },
+      input);
   if (!ran) return ran.takeError();
   if (!report.configs.empty()) report.worst = describeWorst(report);
   report.ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();

@@ -29,8 +29,8 @@ Result<Buffer> deviceBufferWith(VkContext& ctx, const void* bytes, VkDeviceSize 
   if (!cb) return cb.takeError();
   VkBufferCopy region{0, 0, size};
   vkCmdCopyBuffer(*cb, staging->handle(), buffer->handle(), 1, &region);
-  memoryBarrier(*cb, VK_PIPELINE_STAGE_TRANSFER_BIT, VK_ACCESS_TRANSFER_WRITE_BIT,
-                VK_PIPELINE_STAGE_VERTEX_INPUT_BIT, VK_ACCESS_VERTEX_ATTRIBUTE_READ_BIT | VK_ACCESS_INDEX_READ_BIT);
+  memoryBarrier(*cb, VK_PIPELINE_STAGE_TRANSFER_BIT, VK_ACCESS_TRANSFER_WRITE_BIT, VK_PIPELINE_STAGE_VERTEX_INPUT_BIT,
+                VK_ACCESS_VERTEX_ATTRIBUTE_READ_BIT | VK_ACCESS_INDEX_READ_BIT);
   BRDFA_TRY(cmd->submitAndWait());
   return buffer;
 }
@@ -78,7 +78,6 @@ uint64_t deviceBytes(const EnvironmentData& e) {
   const uint64_t table = e.constant ? 0 : (2 * (6ull * kMaxCellsPerEdge * kMaxCellsPerEdge + 1) + kPreviewEntries) * 8;
   return cube + table;
 }
-
 
 template <class Gpu>
 void dropUnusedAssets(std::map<std::string, std::shared_ptr<const Gpu>>& cache, uint64_t needed, uint64_t& freed,
@@ -165,10 +164,10 @@ Result<std::string> AssetCache::registeredPath(AssetKind kind, const std::string
 
 template <class Gpu, class MakeBuiltin, class Decode, class Upload>
 Result<std::shared_ptr<const Gpu>> AssetCache::findOrLoad(AssetKind kind, const std::string& name,
-                                                            const std::string& key,
-                                                            std::map<std::string, std::shared_ptr<const Gpu>>& builtins,
-                                                            std::map<std::string, std::weak_ptr<const Gpu>>& uploads,
-                                                            MakeBuiltin makeBuiltin, Decode decode, Upload upload) {
+                                                          const std::string& key,
+                                                          std::map<std::string, std::shared_ptr<const Gpu>>& builtins,
+                                                          std::map<std::string, std::weak_ptr<const Gpu>>& uploads,
+                                                          MakeBuiltin makeBuiltin, Decode decode, Upload upload) {
   if (auto it = builtins.find(key); it != builtins.end()) return it->second;
   if (auto cached = lockCached(uploads, key)) return cached;
   const std::string what = std::string("the ") + assetKindName(kind) + " '" + name + "'";
@@ -207,7 +206,7 @@ Result<std::shared_ptr<const Gpu>> AssetCache::findOrLoad(AssetKind kind, const 
 }
 
 Result<std::shared_ptr<GpuEnvironment>> AssetCache::uploadEnvironment(const std::string& name,
-                                                                       const EnvironmentData& data) {
+                                                                      const EnvironmentData& data) {
   ImageSpec spec;
   spec.width = spec.height = data.faceSize;
   spec.layers = 6;
@@ -289,7 +288,7 @@ Result<std::shared_ptr<const GpuMesh>> AssetCache::mesh(const std::string& name)
 }
 
 Result<std::shared_ptr<GpuTexture>> AssetCache::uploadTexture(const std::string& name, bool srgb,
-                                                               const TextureData& data) {
+                                                              const TextureData& data) {
   if (data.width == 0 || data.height == 0 || data.rgba8.size() != size_t(data.width) * data.height * 4)
     return makeError(ErrorCode::InvalidArgument, "texture '" + name + "' has no pixels");
   ImageSpec spec;
@@ -333,14 +332,14 @@ std::vector<std::string> AssetCache::textureNames() const {
 }
 
 void AssetCache::writeTextures(VkDescriptorSet objectSet,
-                                 const std::shared_ptr<const GpuTexture> (&textures)[kMaxTextures]) const {
+                               const std::shared_ptr<const GpuTexture> (&textures)[kMaxTextures]) const {
   std::array<VkDescriptorImageInfo, kMaxTextures> info{};
   std::array<VkWriteDescriptorSet, kMaxTextures> w{};
   for (uint32_t i = 0; i < kMaxTextures; ++i) {
     info[i] = {textureSampler_, textures[i] ? textures[i]->image.view() : whiteTexture_.view(),
                VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL};
-    w[i] = {VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET, nullptr, objectSet, 2 + i, 0, 1,
-            VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, &info[i], nullptr, nullptr};
+    w[i] = {VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET,    nullptr,  objectSet, 2 + i,  0, 1,
+            VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, &info[i], nullptr,   nullptr};
   }
   vkUpdateDescriptorSets(ctx_.device(), static_cast<uint32_t>(w.size()), w.data(), 0, nullptr);
 }

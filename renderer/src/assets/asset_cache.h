@@ -48,7 +48,8 @@ class AssetCache {
 
   VkSampler environmentSampler() const { return envSampler_; }
   // Binds `textures` (null entries: white) to set 1 bindings 2..5 of `objectSet`.
-  void writeTextures(VkDescriptorSet objectSet, const std::shared_ptr<const GpuTexture> (&textures)[kMaxTextures]) const;
+  void writeTextures(VkDescriptorSet objectSet,
+                     const std::shared_ptr<const GpuTexture> (&textures)[kMaxTextures]) const;
   // Binds the 1x1 white texture to the four texture slots (set 1, bindings 2..5) of `objectSet`:
   // every slot of a bound set must hold a valid image (see analysis/check_kernel.cpp).
   void writeDefaultTextures(VkDescriptorSet objectSet) const;
@@ -77,7 +78,7 @@ class AssetCache {
   CacheShrinker shrinker_;
   VkSampler envSampler_ = VK_NULL_HANDLE;
   VkSampler textureSampler_ = VK_NULL_HANDLE;  // iTexture0..3: linear, repeating
-  Image whiteTexture_;                          // 1x1 RGBA8 (1, 1, 1, 1): an unbound texture slot
+  Image whiteTexture_;                         // 1x1 RGBA8 (1, 1, 1, 1): an unbound texture slot
 
   mutable std::mutex assetMutex_;
   std::map<std::pair<AssetKind, std::string>, std::string> registered_;  // (kind, name) -> file path

@@ -150,12 +150,11 @@ Result<AssetInfo> inspectAsset(std::string_view bytes, AssetKind kind, const Ass
                                                      " bytes");
   auto format = sniffAssetFormat(bytes);
   if (!format)
-    return makeError(ErrorCode::InvalidArgument,
-                     std::string("unrecognised file: expected ") + kindDescription(kind) +
-                         ", but the content matches none of OBJ, PNG, JPEG, HDR or EXR");
+    return makeError(ErrorCode::InvalidArgument, std::string("unrecognised file: expected ") + kindDescription(kind) +
+                                                     ", but the content matches none of OBJ, PNG, JPEG, HDR or EXR");
   if (!kindAccepts(kind, *format))
-    return makeError(ErrorCode::InvalidArgument, std::string("mislabelled: the file is ") +
-                                                     formatDescription(*format) + ", not " + kindDescription(kind));
+    return makeError(ErrorCode::InvalidArgument, std::string("mislabelled: the file is ") + formatDescription(*format) +
+                                                     ", not " + kindDescription(kind));
   switch (kind) {
     case AssetKind::Mesh: return inspectMesh(bytes, limits);
     case AssetKind::Texture: return inspectTexture(bytes, *format, limits);

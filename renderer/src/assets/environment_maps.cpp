@@ -221,7 +221,8 @@ std::vector<std::string> builtinEnvironmentNames() { return {"furnace", "sky", "
 Result<EnvironmentData> makeBuiltinEnvironment(const std::string& name) {
   if (name == "furnace") {
     // Constant radiance 1. Kernels compile the lookup out; the 1x1 map keeps bindings valid.
-    EnvironmentData env = makeCube(name, 1, [](const glm::vec3&) { return glm::vec3(1.0f); }, 1);
+    EnvironmentData env = makeCube(
+        name, 1, [](const glm::vec3&) { return glm::vec3(1.0f); }, 1);
     env.constant = true;
     return env;
   }

@@ -12,7 +12,7 @@ namespace brdfa {
 
 struct EnvironmentData {
   std::string name;
-  bool constant = false;     // radiance 1 in every direction (the furnace): kernels skip lookups
+  bool constant = false;  // radiance 1 in every direction (the furnace): kernels skip lookups
   uint32_t faceSize = 1;
   std::vector<float> texels;  // linear RGBA, faces +X -X +Y -Y +Z -Z, rows top to bottom; never clipped
 };

@@ -126,7 +126,8 @@ EnvironmentDistribution buildEnvironmentDistribution(const EnvironmentData& env,
     out.table[2 * (c + 1)] = (keepsAll ? uint32_t(c) : alias[c]) << EnvironmentDistribution::kAliasShift | k;
   }
   const std::vector<double> realised = out.realisedCellProbabilities();
-  for (size_t c = 0; c < cells; ++c) out.table[2 * (c + 1) + 1] = std::bit_cast<uint32_t>(float(realised[c] * areaScale));
+  for (size_t c = 0; c < cells; ++c)
+    out.table[2 * (c + 1) + 1] = std::bit_cast<uint32_t>(float(realised[c] * areaScale));
   return out;
 }
 

@@ -18,8 +18,8 @@
 namespace brdfa {
 
 struct EnvironmentDistribution {
-  uint32_t cellsPerEdge = 0;      // D: cells per face edge (a face is D x D cells), a power of two
-  double effectiveDensity = 0;    // integral of pdf^2 over the sphere: how concentrated it is
+  uint32_t cellsPerEdge = 0;    // D: cells per face edge (a face is D x D cells), a power of two
+  double effectiveDensity = 0;  // integral of pdf^2 over the sphere: how concentrated it is
   // 2 words an entry, read by the device as one RG32UI texel (on lavapipe a 64-bit texel fetch
   // costs a fraction of a 128-bit one). Entry 0: (log2 D, bits of effectiveDensity as float).
   // Entry 1 + c for cell c = (face * D + row) * D + column:

@@ -139,8 +139,7 @@ uint64_t chunkCount(const Imf::Header& part, uint64_t width, uint64_t height) {
 // What every part must pass before OpenEXR opens the file: a known type, a plausible data window
 // and a table of chunk offsets that fits in the file.
 Result<void> checkParts(std::string_view bytes, const std::vector<Imf::Header>& parts) {
-  if (Imf::isDeepData(parts[0].type()))
-    return invalid("deep EXR images (several samples per pixel) are not supported");
+  if (Imf::isDeepData(parts[0].type())) return invalid("deep EXR images (several samples per pixel) are not supported");
   uint64_t tableBytes = 0;
   for (const Imf::Header& part : parts) {
     if (!Imf::isSupportedType(part.type()))
@@ -150,8 +149,9 @@ Result<void> checkParts(std::string_view bytes, const std::vector<Imf::Header>& 
     tableBytes += 8 * std::min<uint64_t>(chunkCount(part, (*size)[0], (*size)[1]), bytes.size());
   }
   if (tableBytes > bytes.size())
-    return invalid("the EXR file is cut short or its header is damaged (its tables of pixel chunks cannot fit "
-                   "in it)");
+    return invalid(
+        "the EXR file is cut short or its header is damaged (its tables of pixel chunks cannot fit "
+        "in it)");
   return {};
 }
 
@@ -171,8 +171,7 @@ Result<std::vector<const char*>> colourChannels(const Imf::ChannelList& channels
   const bool rgb = channels.findChannel("R") && channels.findChannel("G") && channels.findChannel("B");
   const bool grey = !channels.findChannel("R") && !channels.findChannel("G") && !channels.findChannel("B") &&
                     channels.findChannel("Y") && !channels.findChannel("RY") && !channels.findChannel("BY");
-  if (!rgb && !grey)
-    return invalid("the EXR file has no R, G and B channels (it has: " + channelList(channels) + ")");
+  if (!rgb && !grey) return invalid("the EXR file has no R, G and B channels (it has: " + channelList(channels) + ")");
   std::vector<const char*> names = grey ? std::vector<const char*>{"Y"} : std::vector<const char*>{"R", "G", "B"};
   for (const char* name : names) {
     const Imf::Channel& channel = *channels.findChannel(name);
@@ -213,8 +212,8 @@ Result<FloatImage> decodeChecked(std::string_view bytes, const ImageSizeCheck& c
   const size_t pixelStride = 3 * sizeof(float);
   Imf::FrameBuffer frame;
   for (size_t c = 0; c < names->size(); ++c)
-    frame.insert((*names)[c], Imf::Slice::Make(Imf::FLOAT, out.rgb.data() + c, window, pixelStride,
-                                               pixelStride * size_t(width)));
+    frame.insert((*names)[c],
+                 Imf::Slice::Make(Imf::FLOAT, out.rgb.data() + c, window, pixelStride, pixelStride * size_t(width)));
   file.setFrameBuffer(frame);
   file.readPixels(window.min.y, window.max.y);
   if (names->size() == 1)  // grey

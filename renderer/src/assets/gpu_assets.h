@@ -25,12 +25,11 @@ struct GpuMesh {
   MemoryReservation memory;  // its share of the renderer's memory budget
 };
 
-
 struct GpuEnvironment {
   std::string name;
   bool constant = false;
   float scale = 1.0f;  // radiance = texel * scale (packHalfCube); folded into the intensity push constant
-  Image cube;  // RGBA16F, SHADER_READ_ONLY_OPTIMAL
+  Image cube;          // RGBA16F, SHADER_READ_ONLY_OPTIMAL
   // Importance-sampling table (environment_sampling.h): a uniform texel buffer of RG32UI
   // entries, read with texelFetch at set 0 binding 9. Its reads are random, and on a CPU device
   // (lavapipe) they were most of a mis sample's cost: a texel buffer's fetch skips the 2D
@@ -38,14 +37,14 @@ struct GpuEnvironment {
   // sampling compares them). A constant environment has only the header.
   TexelBuffer table;
   std::shared_ptr<const EnvironmentDistribution> distribution;  // the same table on the host; null when constant
-  MemoryReservation memory;  // its share of the renderer's memory budget
+  MemoryReservation memory;                                     // its share of the renderer's memory budget
 };
 
 // A texture an object samples as iTexture0..3: RGBA8, sRGB-decoding or linear.
 struct GpuTexture {
   std::string name;
   bool srgb = true;
-  Image image;  // SHADER_READ_ONLY_OPTIMAL
+  Image image;               // SHADER_READ_ONLY_OPTIMAL
   MemoryReservation memory;  // its share of the renderer's memory budget
 };
 

@@ -149,15 +149,17 @@ std::vector<uint8_t> encodePng(const uint8_t* rgba8, int width, int height,
   return out;
 }
 
-std::vector<uint8_t> encodePng(const uint8_t* rgba8, int width, int height) { return encodePng(rgba8, width, height, {}); }
+std::vector<uint8_t> encodePng(const uint8_t* rgba8, int width, int height) {
+  return encodePng(rgba8, width, height, {});
+}
 
 std::string pngText(const std::vector<uint8_t>& png, const std::string& keyword) {
   if (png.size() < 8 || std::memcmp(png.data(), "\x89PNG\r\n\x1a\n", 8) != 0) return {};
   std::string text;
   walkPngChunks(std::string_view(reinterpret_cast<const char*>(png.data()), png.size()), [&](const PngChunk& c) {
     // tEXt data: keyword, a NUL, the text.
-    const bool match = c.type == "tEXt" && c.data.size() > keyword.size() && c.data.substr(0, keyword.size()) == keyword &&
-                       c.data[keyword.size()] == '\0';
+    const bool match = c.type == "tEXt" && c.data.size() > keyword.size() &&
+                       c.data.substr(0, keyword.size()) == keyword && c.data[keyword.size()] == '\0';
     if (match) text = c.data.substr(keyword.size() + 1);
     return !match;
   });
@@ -167,8 +169,7 @@ std::string pngText(const std::vector<uint8_t>& png, const std::string& keyword)
 std::vector<uint8_t> encodePfm(const float* rgba32f, int width, int height) {
   std::vector<uint8_t> out;
   if (!rgba32f || width <= 0 || height <= 0) return out;
-  const std::string header =
-      "PF\n" + std::to_string(width) + " " + std::to_string(height) + "\n-1.0\n";
+  const std::string header = "PF\n" + std::to_string(width) + " " + std::to_string(height) + "\n-1.0\n";
   out.reserve(header.size() + size_t(width) * height * 12);
   out.insert(out.end(), header.begin(), header.end());
   // PFM rows run bottom to top.
@@ -236,13 +237,11 @@ std::vector<uint8_t> encodeExr(const float* rgba32f, int width, int height, bool
   return out;
 }
 
-bool decodePfm(const std::vector<uint8_t>& bytes, int& width, int& height,
-               std::vector<float>& rgba32f) {
+bool decodePfm(const std::vector<uint8_t>& bytes, int& width, int& height, std::vector<float>& rgba32f) {
   size_t pos = 0;
   std::string magic, w, h, scale;
   if (!readToken(bytes, pos, magic) || (magic != "PF" && magic != "Pf")) return false;
-  if (!readToken(bytes, pos, w) || !readToken(bytes, pos, h) || !readToken(bytes, pos, scale))
-    return false;
+  if (!readToken(bytes, pos, w) || !readToken(bytes, pos, h) || !readToken(bytes, pos, scale)) return false;
   int wi = 0, hi = 0;
   if (!parseInt(w, wi) || !parseInt(h, hi)) return false;
   char* end = nullptr;

@@ -45,9 +45,9 @@ Result<void> checkEquirectSize(AssetFormat format, int width, int height) {
 }
 
 Error stbError(AssetFormat format) {
-  return makeError(ErrorCode::InvalidArgument, std::string("the ") + formatLabel(format) +
-                                                   " file cannot be decoded (stb_image: " + stbi_failure_reason() +
-                                                   ")");
+  return makeError(
+      ErrorCode::InvalidArgument,
+      std::string("the ") + formatLabel(format) + " file cannot be decoded (stb_image: " + stbi_failure_reason() + ")");
 }
 
 struct StbFree {
@@ -62,8 +62,10 @@ Error stbHeaderError(std::string_view bytes, AssetFormat format) {
   int width = 0, height = 0, channels = 0;
   const int size = int(bytes.size());
   void* pixels = nullptr;
-  if (format == AssetFormat::Hdr) pixels = stbi_loadf_from_memory(data, size, &width, &height, &channels, 3);
-  else pixels = stbi_load_from_memory(data, size, &width, &height, &channels, 4);
+  if (format == AssetFormat::Hdr)
+    pixels = stbi_loadf_from_memory(data, size, &width, &height, &channels, 3);
+  else
+    pixels = stbi_load_from_memory(data, size, &width, &height, &channels, 4);
   // Unreachable unless the two parsers disagree; then the header is still unreadable to stbi_info.
   if (pixels) {
     stbi_image_free(pixels);
@@ -95,8 +97,8 @@ Result<void> checkBeforeStb(std::string_view bytes, AssetFormat format, const Im
 Result<TextureData> decodeRgba8(std::string_view bytes, AssetFormat format, const ImageSizeCheck& checkSize) {
   if (auto ok = checkBeforeStb(bytes, format, checkSize); !ok) return ok.takeError();
   int width = 0, height = 0, channels = 0;
-  std::unique_ptr<stbi_uc, StbFree> pixels(stbi_load_from_memory(
-      reinterpret_cast<const stbi_uc*>(bytes.data()), int(bytes.size()), &width, &height, &channels, 4));
+  std::unique_ptr<stbi_uc, StbFree> pixels(stbi_load_from_memory(reinterpret_cast<const stbi_uc*>(bytes.data()),
+                                                                 int(bytes.size()), &width, &height, &channels, 4));
   if (!pixels) return stbError(format);
   TextureData texture;
   texture.width = uint32_t(width);
@@ -109,8 +111,8 @@ Result<TextureData> decodeRgba8(std::string_view bytes, AssetFormat format, cons
 Result<FloatImage> decodeHdr(std::string_view bytes, const ImageSizeCheck& checkSize) {
   if (auto ok = checkBeforeStb(bytes, AssetFormat::Hdr, checkSize); !ok) return ok.takeError();
   int width = 0, height = 0, channels = 0;
-  std::unique_ptr<float, StbFree> pixels(stbi_loadf_from_memory(
-      reinterpret_cast<const stbi_uc*>(bytes.data()), int(bytes.size()), &width, &height, &channels, 3));
+  std::unique_ptr<float, StbFree> pixels(stbi_loadf_from_memory(reinterpret_cast<const stbi_uc*>(bytes.data()),
+                                                                int(bytes.size()), &width, &height, &channels, 3));
   if (!pixels) return stbError(AssetFormat::Hdr);
   FloatImage image;
   image.width = width;
@@ -233,8 +235,10 @@ TextureData makeUvGrid() {
   auto onLine = [](uint32_t i) { return i % 32 == 0 || i == 255; };
   for (uint32_t y = 0; y < 256; ++y)
     for (uint32_t x = 0; x < 256; ++x) {
-      if (onLine(x) || onLine(y)) setPixel(texture, x, y, 255, 255, 255);
-      else setPixel(texture, x, y, uint8_t(x), uint8_t(y), 0);
+      if (onLine(x) || onLine(y))
+        setPixel(texture, x, y, 255, 255, 255);
+      else
+        setPixel(texture, x, y, uint8_t(x), uint8_t(y), 0);
     }
   return texture;
 }

@@ -55,16 +55,12 @@ Result<void> checkPngStructure(std::string_view bytes) {
     return false;
   });
   switch (walk.end) {
-    case PngWalk::End::Iend:
-      return {};
-    case PngWalk::End::Stopped:
-      return corrupt("PNG", chunkName(badCrc) + " chunk fails its CRC check");
-    case PngWalk::End::TruncatedHeader:
-      return corrupt("PNG", "it ends inside a chunk header (truncated?)");
+    case PngWalk::End::Iend: return {};
+    case PngWalk::End::Stopped: return corrupt("PNG", chunkName(badCrc) + " chunk fails its CRC check");
+    case PngWalk::End::TruncatedHeader: return corrupt("PNG", "it ends inside a chunk header (truncated?)");
     case PngWalk::End::TruncatedChunk:
       return corrupt("PNG", "it ends inside " + chunkName(walk.type) + " chunk (truncated?)");
-    case PngWalk::End::NoIend:
-      break;
+    case PngWalk::End::NoIend: break;
   }
   return corrupt("PNG", "it ends before its IEND chunk (truncated?)");
 }
@@ -81,9 +77,12 @@ size_t skipEntropyCodedData(const unsigned char* data, size_t size, size_t pos) 
       continue;
     }
     unsigned char next = data[pos + 1];
-    if (next == 0x00 || (next >= 0xD0 && next <= 0xD7)) pos += 2;  // stuffed byte or RSTn
-    else if (next == 0xFF) ++pos;                                   // fill byte before a marker
-    else return pos;
+    if (next == 0x00 || (next >= 0xD0 && next <= 0xD7))
+      pos += 2;  // stuffed byte or RSTn
+    else if (next == 0xFF)
+      ++pos;  // fill byte before a marker
+    else
+      return pos;
   }
   return size;
 }
@@ -117,7 +116,7 @@ Result<void> checkJpegStructure(std::string_view bytes) {
     while (pos < size && data[pos] == 0xFF) ++pos;  // a marker may be preceded by fill bytes
     if (pos >= size) break;
     unsigned char marker = data[pos++];
-    if (marker == 0xD9) return {};                                    // EOI
+    if (marker == 0xD9) return {};                                       // EOI
     if (marker == 0x01 || (marker >= 0xD0 && marker <= 0xD7)) continue;  // TEM, RSTn: no length
     // Every other marker starts a segment whose 2-byte length counts itself.
     if (size - pos < 2) break;

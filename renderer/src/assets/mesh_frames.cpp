@@ -79,8 +79,7 @@ glm::dvec3 unitNormalOf(const Vertex& v) {
 // One triangle's unit dP/du and dP/dv from its texture coordinates (Lengyel 2001): solve
 // [e1 e2] = [dP/du dP/dv] [[s1 s2] [t1 t2]] for the two derivatives. False when the UV triangle
 // has (relative to its size) no area, or the triangle itself has none: no direction then.
-bool triangleUvDerivatives(const Vertex& v0, const Vertex& v1, const Vertex& v2, glm::dvec3& dpdu,
-                           glm::dvec3& dpdv) {
+bool triangleUvDerivatives(const Vertex& v0, const Vertex& v1, const Vertex& v2, glm::dvec3& dpdu, glm::dvec3& dpdv) {
   const glm::dvec3 e1 = positionOf(v1) - positionOf(v0), e2 = positionOf(v2) - positionOf(v0);
   const glm::dvec2 w1 = texCoordOf(v1) - texCoordOf(v0), w2 = texCoordOf(v2) - texCoordOf(v0);
   const double det = w1.x * w2.y - w2.x * w1.y;

@@ -250,7 +250,8 @@ MeshData makeTeapot(uint32_t segmentsPerPatch) {
     spec.segmentsU = spec.segmentsV = segmentsPerPatch;
     spec.uvOrigin = {double(p % ring) / ring, 0.0};
     spec.uvScale = {1.0 / ring, 1.0};
-    appendSurfaceGrid(mesh, [p](double u, double v) { return evaluateTeapotPatch(p, u, v); }, spec);
+    appendSurfaceGrid(
+        mesh, [p](double u, double v) { return evaluateTeapotPatch(p, u, v); }, spec);
   }
   for (Vertex& v : mesh.vertices) rotateZUpToYUp(v);
   centreInUnitSphere(mesh);
@@ -280,9 +281,7 @@ SurfacePoint evaluateTeapotPatch(int patch, double u, double v) {
   return s;
 }
 
-std::vector<std::string> builtinMeshNames() {
-  return {"sphere", "plane", "cube", "torus", "teapot", "dense_sphere"};
-}
+std::vector<std::string> builtinMeshNames() { return {"sphere", "plane", "cube", "torus", "teapot", "dense_sphere"}; }
 
 Result<MeshData> makeBuiltinMesh(const std::string& name) {
   if (name == "sphere") return makeUvSphere(128, 64);

@@ -122,8 +122,8 @@ Result<void> scanNumbers(ScanState& state, const std::vector<std::string_view>& 
     if (!parseWhole(tok[i], value))
       return lineError(state, quoted(tok[i]) + " is not a number (" + kAttributeNames[attribute] + ")");
     if (!std::isfinite(value) || std::abs(value) > std::numeric_limits<float>::max())
-      return lineError(state, quoted(tok[i]) + " is not a finite number in float range (" +
-                                  kAttributeNames[attribute] + ")");
+      return lineError(state,
+                       quoted(tok[i]) + " is not a finite number in float range (" + kAttributeNames[attribute] + ")");
   }
   ++state.defined[attribute];
   return {};
@@ -133,12 +133,12 @@ Result<void> scanNumbers(ScanState& state, const std::vector<std::string_view>& 
 Result<void> scanIndex(ScanState& state, std::string_view corner, std::string_view text, Attribute attribute) {
   int64_t index = 0;
   if (!parseWhole(text, index) || index == 0 || std::abs(index) > std::numeric_limits<int32_t>::max())
-    return lineError(state, "face corner " + quoted(corner) +
-                                " is not v, v/vt, v//vn or v/vt/vn with non-zero whole numbers");
+    return lineError(state,
+                     "face corner " + quoted(corner) + " is not v, v/vt, v//vn or v/vt/vn with non-zero whole numbers");
   if (index < 0 && static_cast<uint64_t>(-index) > state.defined[attribute])
-    return lineError(state, "face corner " + quoted(corner) + " counts back " + std::to_string(-index) +
-                                ", but only " + std::to_string(state.defined[attribute]) + " " +
-                                kAttributePlurals[attribute] + " are defined before it");
+    return lineError(state, "face corner " + quoted(corner) + " counts back " + std::to_string(-index) + ", but only " +
+                                std::to_string(state.defined[attribute]) + " " + kAttributePlurals[attribute] +
+                                " are defined before it");
   HighestIndex& highest = state.highest[attribute];
   if (index > highest.index) highest = {index, state.line};
   return {};
@@ -205,8 +205,8 @@ Result<void> checkHighestIndices(const ScanState& state) {
     const HighestIndex& h = state.highest[a];
     if (static_cast<uint64_t>(h.index) > state.defined[a])
       return objError("OBJ line " + std::to_string(h.line) + ": a face refers to " + kAttributeNames[a] + " " +
-                      std::to_string(h.index) + ", but the file defines only " +
-                      std::to_string(state.defined[a]) + " " + kAttributePlurals[a]);
+                      std::to_string(h.index) + ", but the file defines only " + std::to_string(state.defined[a]) +
+                      " " + kAttributePlurals[a]);
   }
   return {};
 }

@@ -52,8 +52,7 @@ Result<void> MemoryLedger::exchange(MemoryUse use, uint64_t oldBytes, uint64_t n
   const uint64_t total = total_.load();
   const uint64_t others = total - std::min(total, oldBytes);
   return makeError(ErrorCode::OverBudget,
-                   what + " needs " + mebibytesText(newBytes) + " of " + useName(use) +
-                       ", and " +
+                   what + " needs " + mebibytesText(newBytes) + " of " + useName(use) + ", and " +
                        (label_.empty() ? "the renderer's memory budget (" + mebibytesText(budget_) + ")" : label_) +
                        " has " + mebibytesText(budget_ - std::min(others, budget_)) +
                        (shrink ? " left after dropping every unused cached program and asset" : " left") +

@@ -26,8 +26,8 @@ const char* samplingModeName(SamplingMode mode) {
 }
 
 bool samplingModeFromName(const std::string& name, SamplingMode& mode) {
-  for (SamplingMode m : {SamplingMode::Cosine, SamplingMode::Uniform, SamplingMode::Brdf, SamplingMode::Environment,
-                         SamplingMode::Mis})
+  for (SamplingMode m :
+       {SamplingMode::Cosine, SamplingMode::Uniform, SamplingMode::Brdf, SamplingMode::Environment, SamplingMode::Mis})
     if (name == samplingModeName(m)) {
       mode = m;
       return true;
@@ -54,15 +54,15 @@ bool toneMapFromName(const std::string& name, ToneMap& toneMap) {
 
 Result<void> checkScene(const Scene& s) {
   const RenderSettings& r = s.render;
-  if (r.width < kMinImageSize || r.width > kMaxImageSize)
-    return invalid("render.width", "must be between 16 and 4096");
+  if (r.width < kMinImageSize || r.width > kMaxImageSize) return invalid("render.width", "must be between 16 and 4096");
   if (r.height < kMinImageSize || r.height > kMaxImageSize)
     return invalid("render.height", "must be between 16 and 4096");
   if (r.samplesPerFrame < 1 || r.samplesPerFrame > kMaxSamplesPerFrame)
     return invalid("render.samples_per_frame", "must be between 1 and 1024");
   if (r.maxSamples < 1 || r.maxSamples > kMaxTotalSamples)
     return invalid("render.max_samples", "must be between 1 and 1048576");
-  if (!std::isfinite(r.exposure) || std::fabs(r.exposure) > 64) return invalid("render.exposure", "must be within +-64");
+  if (!std::isfinite(r.exposure) || std::fabs(r.exposure) > 64)
+    return invalid("render.exposure", "must be within +-64");
 
   const Camera& c = s.camera;
   if (!finite3(c.position) || std::fabs(c.position[0]) > 1e6f || std::fabs(c.position[1]) > 1e6f ||
@@ -86,12 +86,12 @@ Result<void> checkScene(const Scene& s) {
     if (!finite3(o.rotate)) return invalid(at + ".rotate", "must be finite");
     if (!finite3(o.scale)) return invalid(at + ".scale", "must be finite");
     for (float v : o.scale)
-      if (std::fabs(v) < 1e-6f || std::fabs(v) > 1e6f) return invalid(at + ".scale", "each factor must be within 1e-6..1e6 in magnitude");
+      if (std::fabs(v) < 1e-6f || std::fabs(v) > 1e6f)
+        return invalid(at + ".scale", "each factor must be within 1e-6..1e6 in magnitude");
     if (o.textures.size() > static_cast<size_t>(kMaxTextures)) return invalid(at + ".textures", "at most 4 textures");
     for (const auto& [name, value] : o.params) {
       const std::string field = at + ".params." + name;
-      if (!o.brdf->findParam(name))
-        return invalid(field, "the BRDF has no parameter of this name");
+      if (!o.brdf->findParam(name)) return invalid(field, "the BRDF has no parameter of this name");
       if (!finite3(value)) return invalid(field, "must be finite");
     }
   }

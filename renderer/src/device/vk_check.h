@@ -18,9 +18,8 @@ inline Error vkError(VkResult r, const char* what) {
 }  // namespace brdfa
 
 // Returns an Error from the enclosing function (whose return type is a Result) on failure.
-#define BRDFA_VK_TRY(call)                                  \
-  do {                                                      \
-    VkResult brdfa_vk_r_ = (call);                          \
+#define BRDFA_VK_TRY(call)                                                      \
+  do {                                                                          \
+    VkResult brdfa_vk_r_ = (call);                                              \
     if (brdfa_vk_r_ != VK_SUCCESS) return ::brdfa::vkError(brdfa_vk_r_, #call); \
   } while (0)
-

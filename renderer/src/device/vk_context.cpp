@@ -57,8 +57,8 @@ bool findQueueFamily(VkPhysicalDevice pd, uint32_t& family) {
 }
 
 std::string versionString(uint32_t v) {
-  return std::to_string(VK_API_VERSION_MAJOR(v)) + "." + std::to_string(VK_API_VERSION_MINOR(v)) +
-         "." + std::to_string(VK_API_VERSION_PATCH(v));
+  return std::to_string(VK_API_VERSION_MAJOR(v)) + "." + std::to_string(VK_API_VERSION_MINOR(v)) + "." +
+         std::to_string(VK_API_VERSION_PATCH(v));
 }
 
 bool hasLayer(const char* name) {
@@ -155,9 +155,8 @@ Result<std::unique_ptr<VkContext>> VkContext::create(const RendererOptions& opti
   ctx->info_.name = p.deviceName;
   ctx->info_.type = p.deviceType == VK_PHYSICAL_DEVICE_TYPE_CPU ? "cpu" : "gpu";
   ctx->info_.apiVersion = versionString(p.apiVersion);
-  ctx->info_.driver = p.apiVersion >= VK_API_VERSION_1_2
-                          ? std::string(driver.driverName) + " " + driver.driverInfo
-                          : "driver " + std::to_string(p.driverVersion);
+  ctx->info_.driver = p.apiVersion >= VK_API_VERSION_1_2 ? std::string(driver.driverName) + " " + driver.driverInfo
+                                                         : "driver " + std::to_string(p.driverVersion);
   return ctx;
 }
 

@@ -45,8 +45,7 @@ class VkContext {
   // after vkQueueSubmit, lavapipe's queue thread would still run submissions in order, but the
   // wait would include the others' work; lavapipe's timestamp queries read ~0 for long
   // dispatches.) Recording, on the host, still runs concurrently.
-  Result<void> submitAndWait(VkCommandBuffer commands, VkFence fence, double* busyMs = nullptr,
-                             bool viewPass = false);
+  Result<void> submitAndWait(VkCommandBuffer commands, VkFence fence, double* busyMs = nullptr, bool viewPass = false);
 
   // Device time one submission of a pass aims at (RendererOptions::submissionTargetMs), or,
   // when no other view's pass (submissions with viewPass, told apart by their fence; `mine`

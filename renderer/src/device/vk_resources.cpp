@@ -42,10 +42,9 @@ Result<Buffer> Buffer::create(VkContext& ctx, VkDeviceSize size, VkBufferUsageFl
   VkMemoryRequirements req;
   vkGetBufferMemoryRequirements(b.device_, b.buffer_, &req);
   auto type = hostVisible
-                  ? ctx.findMemoryType(req.memoryTypeBits,
-                                       VK_MEMORY_PROPERTY_HOST_VISIBLE_BIT | VK_MEMORY_PROPERTY_HOST_COHERENT_BIT,
-                                       preferDeviceLocal ? VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT
-                                                         : VK_MEMORY_PROPERTY_HOST_CACHED_BIT)
+                  ? ctx.findMemoryType(
+                        req.memoryTypeBits, VK_MEMORY_PROPERTY_HOST_VISIBLE_BIT | VK_MEMORY_PROPERTY_HOST_COHERENT_BIT,
+                        preferDeviceLocal ? VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT : VK_MEMORY_PROPERTY_HOST_CACHED_BIT)
                   : ctx.findMemoryType(req.memoryTypeBits, VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT);
   if (!type) return type.takeError();
   VkMemoryAllocateInfo mai{VK_STRUCTURE_TYPE_MEMORY_ALLOCATE_INFO};
@@ -220,8 +219,8 @@ Result<void> CommandContext::submitAndWait(double* busyMs, bool viewPass) {
   return ctx_->submitAndWait(commands_, fence_, busyMs, viewPass);
 }
 
-void memoryBarrier(VkCommandBuffer cb, VkPipelineStageFlags src, VkAccessFlags srcAccess,
-                   VkPipelineStageFlags dst, VkAccessFlags dstAccess) {
+void memoryBarrier(VkCommandBuffer cb, VkPipelineStageFlags src, VkAccessFlags srcAccess, VkPipelineStageFlags dst,
+                   VkAccessFlags dstAccess) {
   VkMemoryBarrier mb{VK_STRUCTURE_TYPE_MEMORY_BARRIER};
   mb.srcAccessMask = srcAccess;
   mb.dstAccessMask = dstAccess;
@@ -252,15 +251,14 @@ Result<void> uploadImage(VkContext& ctx, const Image& image, const void* texels,
   auto cb = cmd->begin();
   if (!cb) return cb.takeError();
   imageBarrier(*cb, image, VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL,
-               VK_PIPELINE_STAGE_TOP_OF_PIPE_BIT, 0, VK_PIPELINE_STAGE_TRANSFER_BIT,
-               VK_ACCESS_TRANSFER_WRITE_BIT);
+               VK_PIPELINE_STAGE_TOP_OF_PIPE_BIT, 0, VK_PIPELINE_STAGE_TRANSFER_BIT, VK_ACCESS_TRANSFER_WRITE_BIT);
   VkBufferImageCopy region{};
   region.imageSubresource = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 0, image.spec().layers};
   region.imageExtent = {image.spec().width, image.spec().height, 1};
   vkCmdCopyBufferToImage(*cb, staging->handle(), image.handle(), VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, 1, &region);
   imageBarrier(*cb, image, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL,
-               VK_PIPELINE_STAGE_TRANSFER_BIT, VK_ACCESS_TRANSFER_WRITE_BIT,
-               VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_ACCESS_SHADER_READ_BIT);
+               VK_PIPELINE_STAGE_TRANSFER_BIT, VK_ACCESS_TRANSFER_WRITE_BIT, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT,
+               VK_ACCESS_SHADER_READ_BIT);
   return cmd->submitAndWait();
 }
 

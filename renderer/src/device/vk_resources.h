@@ -136,13 +136,12 @@ class CommandContext {
 };
 
 // Records a global memory barrier between two pipeline stages.
-void memoryBarrier(VkCommandBuffer cb, VkPipelineStageFlags src, VkAccessFlags srcAccess,
-                   VkPipelineStageFlags dst, VkAccessFlags dstAccess);
+void memoryBarrier(VkCommandBuffer cb, VkPipelineStageFlags src, VkAccessFlags srcAccess, VkPipelineStageFlags dst,
+                   VkAccessFlags dstAccess);
 
 // Records a layout transition of all subresources of `image`.
 void imageBarrier(VkCommandBuffer cb, const Image& image, VkImageLayout from, VkImageLayout to,
-                  VkPipelineStageFlags src, VkAccessFlags srcAccess, VkPipelineStageFlags dst,
-                  VkAccessFlags dstAccess);
+                  VkPipelineStageFlags src, VkAccessFlags srcAccess, VkPipelineStageFlags dst, VkAccessFlags dstAccess);
 
 // Uploads tightly packed texels to every layer of `image` (layer-major) and leaves it in
 // SHADER_READ_ONLY_OPTIMAL.

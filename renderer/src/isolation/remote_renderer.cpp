@@ -56,17 +56,17 @@ struct Pending {
   std::vector<std::string> programs;  // program keys the request builds or runs
   std::vector<std::string> names;     // their BRDFs' names, for messages
   uint64_t view = 0;
-  bool done = false;   // reply holds the worker's answer
-  bool lost = false;   // the worker was replaced before it answered
+  bool done = false;  // reply holds the worker's answer
+  bool lost = false;  // the worker was replaced before it answered
   // Signalled (under the renderer's mutex) when done or lost turns true: only the one caller
   // wakes for its reply (a notify_all per reply woke every waiting session, the watchdog
   // included, and under a loaded CPU each wake-up costs a scheduling delay).
   std::condition_variable answered;
   std::optional<Error> blame;  // set when this request caused the replacement
   wire::Message reply;
-  std::string op;           // for the channel counters
-  size_t bytesSent = 0;     // the request's frame
-  bool inFlight = false;    // written, and neither answered nor lost yet
+  std::string op;         // for the channel counters
+  size_t bytesSent = 0;   // the request's frame
+  bool inFlight = false;  // written, and neither answered nor lost yet
 };
 
 struct Call {
@@ -144,7 +144,7 @@ class RemoteView : public RenderView {
   mutable std::mutex mutex_;
   uint64_t generation_ = 0;  // the worker generation the view exists in (0: none yet)
   std::optional<Scene> scene_;
-  ScenePrograms programs_;  // of scene_ (hashing a program's code on every pass would cost)
+  ScenePrograms programs_;       // of scene_ (hashing a program's code on every pass would cost)
   std::optional<Error> failed_;  // its pass overran: sticky until a new scene
   FrameStats stats_;
 };
@@ -227,7 +227,8 @@ class RemoteRenderer : public Renderer, public std::enable_shared_from_this<Remo
     return m->head.at("value").get<std::vector<Vec3>>();
   }
 
-  Result<std::vector<AlbedoEstimate>> estimateAlbedo(const BrdfDefinition& brdf, const std::vector<ParamSetting>& settings,
+  Result<std::vector<AlbedoEstimate>> estimateAlbedo(const BrdfDefinition& brdf,
+                                                     const std::vector<ParamSetting>& settings,
                                                      const std::vector<Vec3>& views, uint32_t samplesPerView) override {
     Call c = brdfCall("analysisAlbedo", brdf, Budget::Pass);
     c.head["settings"] = settings;
@@ -488,8 +489,9 @@ class RemoteRenderer : public Renderer, public std::enable_shared_from_this<Remo
       assets = assets_;
     }
     for (const auto& [key, path] : assets) {
-      auto done = roundTrip(c.fd, json{{"op", "registerAsset"}, {"id", 0}, {"name", key.first}, {"kind", key.second}, {"path", path}},
-                            kStartSeconds);
+      auto done = roundTrip(
+          c.fd, json{{"op", "registerAsset"}, {"id", 0}, {"name", key.first}, {"kind", key.second}, {"path", path}},
+          kStartSeconds);
       if (!done)
         std::fprintf(stderr, "render worker: asset %s not registered again: %s\n", key.first.c_str(),
                      done.error().message.c_str());
@@ -618,11 +620,13 @@ class RemoteRenderer : public Renderer, public std::enable_shared_from_this<Remo
   Error blameError(const Pending& p, const std::string& kind, const std::string& resource,
                    const std::vector<std::string>& quarantined) const {
     const bool build = kind == "build";
-    std::string budget = resource == "memory" ? "the render worker's memory budget of " + mibText(memoryLimit_)
+    std::string budget = resource == "memory"        ? "the render worker's memory budget of " + mibText(memoryLimit_)
                          : p.budget == Budget::Check ? "the check budget of " + secondsText(options_.checkSeconds)
                          : build ? "the pipeline build budget of " + secondsText(options_.buildSeconds)
                                  : "the budget of " + secondsText(options_.passSeconds) + " per submission";
-    std::string what = build ? "building its pipeline" : p.budget == Budget::Check ? "its check" : "a pass of its scene";
+    std::string what = build                       ? "building its pipeline"
+                       : p.budget == Budget::Check ? "its check"
+                                                   : "a pass of its scene";
     std::string names;
     for (size_t i = 0; i < p.programs.size(); ++i) {
       if (std::find(quarantined.begin(), quarantined.end(), p.programs[i]) == quarantined.end()) continue;
@@ -675,7 +679,7 @@ class RemoteRenderer : public Renderer, public std::enable_shared_from_this<Remo
     lock.unlock();
     const int status = retire(dead, reader);
     std::fprintf(stderr, "render worker %s; restarting. Blamed: %s\n",
-                 overran ? "overran its budget"
+                 overran   ? "overran its budget"
                  : culprit ? "fell silent"
                            : ("ended (" + worker_process::describeStatus(status) + ")").c_str(),
                  blamed.c_str());

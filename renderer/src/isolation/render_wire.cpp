@@ -31,16 +31,16 @@ NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(AlbedoEstimate, mean, stdError, samples, nonF
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(SamplerCheckConfig, normalLabel, normal, tangent, bitangent, view, viewDeg,
                                    viewAzimuthDeg)
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(SamplerConfigResult, config, rejected, maxValueMismatch, maxCellZ, albedoZ,
-                                   maxPdfMismatch, maxLengthError, pdfBelowHorizon, chi2PValue, chi2Failure,
-                                   worstCheck, worstValue, worstSeverity)
+                                   maxPdfMismatch, maxLengthError, pdfBelowHorizon, chi2PValue, chi2Failure, worstCheck,
+                                   worstValue, worstSeverity)
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(SamplerCheckReport, samples, rejected, maxValueMismatch, cellsTested, maxCellZ,
                                    maxAlbedoZ, chi2Run, minChi2PValue, chi2PValues, chi2Threshold, maxPdfMismatch,
                                    chi2Failure, maxLengthError, pdfBelowHorizon, configurations,
-                                   samplesPerConfiguration, configs, worstConfig, worstCheck, worstValue,
-                                   worstSeverity, worst, ms)
+                                   samplesPerConfiguration, configs, worstConfig, worstCheck, worstValue, worstSeverity,
+                                   worst, ms)
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(EnvironmentSamplerReport, samples, cellChi2PValue, positionChi2PValue,
-                                   maxSolidAngleZ, solidAngleBins, maxPdfMismatch, hostPdfMismatch,
-                                   pdfMismatchFraction, maxLengthError, failure)
+                                   maxSolidAngleZ, solidAngleBins, maxPdfMismatch, hostPdfMismatch, pdfMismatchFraction,
+                                   maxLengthError, failure)
 
 namespace render_wire {
 
@@ -79,10 +79,14 @@ bool decode(const std::string& frame, Message& message) {
 }
 
 json toJson(const BrdfDefinition& brdf) {
-  return json{{"format", brdf.format},           {"params", brdf.params},
-              {"shader", brdf.shader},           {"shaderFirstLine", brdf.shaderFirstLine},
-              {"sampleShader", brdf.sampleShader}, {"sampleFirstLine", brdf.sampleFirstLine},
-              {"warnings", brdf.warnings},       {"claims", brdf.claims}};
+  return json{{"format", brdf.format},
+              {"params", brdf.params},
+              {"shader", brdf.shader},
+              {"shaderFirstLine", brdf.shaderFirstLine},
+              {"sampleShader", brdf.sampleShader},
+              {"sampleFirstLine", brdf.sampleFirstLine},
+              {"warnings", brdf.warnings},
+              {"claims", brdf.claims}};
 }
 
 BrdfDefinition brdfFromJson(const json& j) {
@@ -108,7 +112,8 @@ std::string programKey(const BrdfDefinition& brdf) {
 }
 
 json toJson(const Error& error) {
-  return json{{"code", error.code}, {"message", error.message}, {"field", error.field}, {"diagnostics", error.diagnostics}};
+  return json{
+      {"code", error.code}, {"message", error.message}, {"field", error.field}, {"diagnostics", error.diagnostics}};
 }
 
 Error errorFromJson(const json& j) {
@@ -132,7 +137,8 @@ json toJson(const Scene& scene) {
                            {"scale", o.scale},
                            {"textures", o.textures}});
   }
-  return json{{"camera", scene.camera}, {"environment", scene.environment}, {"render", scene.render}, {"objects", objects}};
+  return json{
+      {"camera", scene.camera}, {"environment", scene.environment}, {"render", scene.render}, {"objects", objects}};
 }
 
 Scene sceneFromJson(const json& j) {
@@ -220,18 +226,26 @@ FrameStats statsFromJson(const json& j) {
 
 json toJson(const RendererOptions& o) {
   // isolate is the caller's business: the worker always renders in its own process.
-  return json{{"deviceName", o.deviceName},       {"shaderDir", o.shaderDir},
-              {"validation", o.validation},       {"resolve", o.resolve},
-              {"cacheDir", o.cacheDir},           {"loadCache", o.loadCache},
+  return json{{"deviceName", o.deviceName},
+              {"shaderDir", o.shaderDir},
+              {"validation", o.validation},
+              {"resolve", o.resolve},
+              {"cacheDir", o.cacheDir},
+              {"loadCache", o.loadCache},
               {"profilePasses", o.profilePasses},
-              {"driverCacheDir", o.driverCacheDir}, {"compileSeconds", o.compileSeconds},
-              {"compileMemoryMiB", o.compileMemoryMiB}, {"compileWorkers", o.compileWorkers},
-              {"memoryBudgetBytes", o.memoryBudgetBytes}, {"memoryBudgetLabel", o.memoryBudgetLabel},
+              {"driverCacheDir", o.driverCacheDir},
+              {"compileSeconds", o.compileSeconds},
+              {"compileMemoryMiB", o.compileMemoryMiB},
+              {"compileWorkers", o.compileWorkers},
+              {"memoryBudgetBytes", o.memoryBudgetBytes},
+              {"memoryBudgetLabel", o.memoryBudgetLabel},
               {"spareProcesses", o.spareProcesses},
               {"buildSeconds", o.buildSeconds},
-              {"passSeconds", o.passSeconds},       {"checkSeconds", o.checkSeconds},
+              {"passSeconds", o.passSeconds},
+              {"checkSeconds", o.checkSeconds},
               {"submissionTargetMs", o.submissionTargetMs},
-              {"soloSubmissionTargetMs", o.soloSubmissionTargetMs},     {"workerMemoryBytes", o.workerMemoryBytes}};
+              {"soloSubmissionTargetMs", o.soloSubmissionTargetMs},
+              {"workerMemoryBytes", o.workerMemoryBytes}};
 }
 
 RendererOptions optionsFromJson(const json& j) {

@@ -41,7 +41,8 @@ std::vector<std::string> parameterNames(std::string_view text, std::string_view 
     size_t start = 0;
     while (start <= params.size()) {
       size_t comma = params.find(',', start);
-      std::string_view p = params.substr(start, comma == std::string_view::npos ? std::string_view::npos : comma - start);
+      std::string_view p =
+          params.substr(start, comma == std::string_view::npos ? std::string_view::npos : comma - start);
       size_t end = p.size();
       while (end > 0 && !identChar(p[end - 1])) --end;
       size_t begin = end;
@@ -123,8 +124,7 @@ bool declaresName(std::string_view code, std::string_view name) {
     }
     size_t after = end;
     while (after < text.size() && std::isspace(static_cast<unsigned char>(text[after]))) ++after;
-    if (after < text.size() && text[after] == '=' && (after + 1 == text.size() || text[after + 1] != '='))
-      return true;
+    if (after < text.size() && text[after] == '=' && (after + 1 == text.size() || text[after + 1] != '=')) return true;
   }
   return false;
 }

@@ -106,25 +106,22 @@ const std::unordered_set<std::string>& glslReservedWords() {
   static const std::unordered_set<std::string> words = [] {
     std::unordered_set<std::string> w = {
         // GLSL 4.50 keywords
-        "const", "uniform", "buffer", "shared", "attribute", "varying", "coherent", "volatile",
-        "restrict", "readonly", "writeonly", "atomic_uint", "layout", "centroid", "flat",
-        "smooth", "noperspective", "patch", "sample", "invariant", "precise", "break",
-        "continue", "do", "for", "while", "switch", "case", "default", "if", "else",
-        "subroutine", "in", "out", "inout", "int", "void", "bool", "true", "false", "float",
-        "double", "discard", "return", "uint", "lowp", "mediump", "highp", "precision",
-        "struct",
+        "const", "uniform", "buffer", "shared", "attribute", "varying", "coherent", "volatile", "restrict", "readonly",
+        "writeonly", "atomic_uint", "layout", "centroid", "flat", "smooth", "noperspective", "patch", "sample",
+        "invariant", "precise", "break", "continue", "do", "for", "while", "switch", "case", "default", "if", "else",
+        "subroutine", "in", "out", "inout", "int", "void", "bool", "true", "false", "float", "double", "discard",
+        "return", "uint", "lowp", "mediump", "highp", "precision", "struct",
         // reserved for future use
-        "common", "partition", "active", "asm", "class", "union", "enum", "typedef",
-        "template", "this", "resource", "goto", "inline", "noinline", "public", "static",
-        "extern", "external", "interface", "long", "short", "half", "fixed", "unsigned",
-        "superp", "input", "output", "hvec2", "hvec3", "hvec4", "fvec2", "fvec3", "fvec4",
+        "common", "partition", "active", "asm", "class", "union", "enum", "typedef", "template", "this", "resource",
+        "goto", "inline", "noinline", "public", "static", "extern", "external", "interface", "long", "short", "half",
+        "fixed", "unsigned", "superp", "input", "output", "hvec2", "hvec3", "hvec4", "fvec2", "fvec3", "fvec4",
         "sampler3DRect", "filter", "sizeof", "cast", "namespace", "using",
         // GL_KHR_vulkan_glsl
-        "sampler", "samplerShadow", "subpassInput", "isubpassInput", "usubpassInput",
-        "subpassInputMS", "isubpassInputMS", "usubpassInputMS",
+        "sampler", "samplerShadow", "subpassInput", "isubpassInput", "usubpassInput", "subpassInputMS",
+        "isubpassInputMS", "usubpassInputMS",
         // shadow samplers
-        "sampler1DShadow", "sampler2DShadow", "samplerCubeShadow", "sampler1DArrayShadow",
-        "sampler2DArrayShadow", "sampler2DRectShadow", "samplerCubeArrayShadow"};
+        "sampler1DShadow", "sampler2DShadow", "samplerCubeShadow", "sampler1DArrayShadow", "sampler2DArrayShadow",
+        "sampler2DRectShadow", "samplerCubeArrayShadow"};
     for (const char* prefix : {"", "i", "u", "b", "d"})
       for (int n = 2; n <= 4; ++n) w.insert(std::string(prefix) + "vec" + std::to_string(n));
     for (const char* prefix : {"", "d"})
@@ -135,8 +132,8 @@ const std::unordered_set<std::string>& glslReservedWords() {
       }
     for (const char* prefix : {"", "i", "u"})
       for (const char* kind : {"sampler", "texture", "image"})
-        for (const char* dim : {"1D", "2D", "3D", "Cube", "2DRect", "1DArray", "2DArray",
-                                "Buffer", "2DMS", "2DMSArray", "CubeArray"})
+        for (const char* dim :
+             {"1D", "2D", "3D", "Cube", "2DRect", "1DArray", "2DArray", "Buffer", "2DMS", "2DMSArray", "CubeArray"})
           w.insert(std::string(prefix) + kind + dim);
     return w;
   }();
@@ -144,9 +141,8 @@ const std::unordered_set<std::string>& glslReservedWords() {
 }
 
 bool isReservedByIntegrator(std::string_view name) {
-  static const std::array<std::string_view, 8> names = {
-      "BRDF", "sampleBRDF", "texCoord", "iTexture0", "iTexture1", "iTexture2", "iTexture3",
-      "BrdfParams"};
+  static const std::array<std::string_view, 8> names = {"BRDF",      "sampleBRDF", "texCoord",  "iTexture0",
+                                                        "iTexture1", "iTexture2",  "iTexture3", "BrdfParams"};
   return std::find(names.begin(), names.end(), name) != names.end();
 }
 
@@ -163,16 +159,13 @@ std::optional<std::string> nameProblem(std::string_view name) {
   if (!isIdentifier(name))
     return "parameter name " + quoted(name) +
            " is not a GLSL identifier (letters, digits and '_', not starting with a digit)";
-  if (glslReservedWords().count(n))
-    return "parameter name " + quoted(name) + " is a GLSL keyword or reserved word";
-  if (name.starts_with("gl_"))
-    return "parameter name " + quoted(name) + " starts with 'gl_', which GLSL reserves";
+  if (glslReservedWords().count(n)) return "parameter name " + quoted(name) + " is a GLSL keyword or reserved word";
+  if (name.starts_with("gl_")) return "parameter name " + quoted(name) + " starts with 'gl_', which GLSL reserves";
   if (name.starts_with("brdfa_"))
     return "parameter name " + quoted(name) + " starts with 'brdfa_', which the renderer reserves";
   if (name.find("__") != std::string_view::npos)
     return "parameter name " + quoted(name) + " contains '__', which GLSL reserves";
-  if (isReservedByIntegrator(name))
-    return "parameter name " + quoted(name) + " is already defined by the renderer";
+  if (isReservedByIntegrator(name)) return "parameter name " + quoted(name) + " is already defined by the renderer";
   return std::nullopt;
 }
 
@@ -185,11 +178,10 @@ bool isPreprocessorDirective(std::string_view trimmedLine) {
   if (rest.empty()) return true;  // the null directive
   size_t end = 0;
   while (end < rest.size() && (std::isalpha(static_cast<unsigned char>(rest[end])))) ++end;
-  static const std::array<std::string_view, 13> directives = {
-      "define", "undef", "if", "ifdef", "ifndef", "else", "elif", "endif", "error", "pragma",
-      "extension", "version", "line"};
-  return std::find(directives.begin(), directives.end(), rest.substr(0, end)) !=
-         directives.end();
+  static const std::array<std::string_view, 13> directives = {"define",    "undef",   "if",    "ifdef", "ifndef",
+                                                              "else",      "elif",    "endif", "error", "pragma",
+                                                              "extension", "version", "line"};
+  return std::find(directives.begin(), directives.end(), rest.substr(0, end)) != directives.end();
 }
 
 enum class Section { None, Parameters, Shader, Sample, IsFunc, Unknown };
@@ -204,8 +196,7 @@ bool definesVec3Function(std::string_view text, std::string_view name) {
     while (i < text.size() && std::isspace(static_cast<unsigned char>(text[i]))) ++i;
     return i;
   };
-  for (size_t at = text.find("vec3"); at != std::string_view::npos;
-       at = text.find("vec3", at + 1)) {
+  for (size_t at = text.find("vec3"); at != std::string_view::npos; at = text.find("vec3", at + 1)) {
     if (at > 0 && isIdentChar(text[at - 1])) continue;
     size_t i = at + 4;
     const size_t nameStart = skipSpace(i);
@@ -248,9 +239,7 @@ class Parser {
   Result<BrdfDefinition> run(std::string_view text);
 
  private:
-  void error(int line, std::string message) {
-    errors_.push_back(Diagnostic{line, 0, "error", std::move(message)});
-  }
+  void error(int line, std::string message) { errors_.push_back(Diagnostic{line, 0, "error", std::move(message)}); }
   void warn(int line, std::string message) {
     def_.warnings.push_back(Diagnostic{line, 0, "warning", std::move(message)});
   }
@@ -280,9 +269,8 @@ class Parser {
 
 void Parser::beginSection(std::string_view name, int line) {
   if (section_ != Section::None) {
-    error(line, "'::begin " + std::string(name) + "' inside the '" + sectionName_ +
-                    "' section opened on line " + std::to_string(sectionLine_) +
-                    "; close it with '::end " + sectionName_ + "' first");
+    error(line, "'::begin " + std::string(name) + "' inside the '" + sectionName_ + "' section opened on line " +
+                    std::to_string(sectionLine_) + "; close it with '::end " + sectionName_ + "' first");
     return;
   }
   sectionName_ = std::string(name);
@@ -294,8 +282,7 @@ void Parser::beginSection(std::string_view name, int line) {
     const bool isShader = name == "shader";
     int& seen = isShader ? shaderSectionLine_ : sampleSectionLine_;
     if (seen != 0) {
-      error(line, "second '::begin " + sectionName_ + "' section (the first is on line " +
-                      std::to_string(seen) + ")");
+      error(line, "second '::begin " + sectionName_ + "' section (the first is on line " + std::to_string(seen) + ")");
     } else {
       seen = line;
       glslTarget_ = isShader ? &def_.shader : &def_.sampleShader;
@@ -304,9 +291,10 @@ void Parser::beginSection(std::string_view name, int line) {
     section_ = isShader ? Section::Shader : Section::Sample;
   } else if (name == "isFunc") {
     section_ = Section::IsFunc;
-    warn(line, "the 'isFunc' section is ignored; importance sampling uses '::begin sample' "
-               "with vec3 sampleBRDF(vec2 u, vec3 V, vec3 N, vec3 X, vec3 Y, out vec3 L, "
-               "out float pdf)");
+    warn(line,
+         "the 'isFunc' section is ignored; importance sampling uses '::begin sample' "
+         "with vec3 sampleBRDF(vec2 u, vec3 V, vec3 N, vec3 X, vec3 Y, out vec3 L, "
+         "out float pdf)");
   } else {
     section_ = Section::Unknown;
     warn(line, "unknown section " + quoted(name) + " is ignored");
@@ -319,8 +307,8 @@ void Parser::endSection(std::string_view name, int line) {
     return;
   }
   if (name != sectionName_) {
-    error(line, "'::end " + std::string(name) + "' does not close the '" + sectionName_ +
-                    "' section opened on line " + std::to_string(sectionLine_));
+    error(line, "'::end " + std::string(name) + "' does not close the '" + sectionName_ + "' section opened on line " +
+                    std::to_string(sectionLine_));
     return;
   }
   section_ = Section::None;
@@ -330,12 +318,11 @@ void Parser::endSection(std::string_view name, int line) {
 void Parser::handleDirective(const std::vector<std::string_view>& tokens, int line) {
   const bool begin = tokens[0] == "::begin";
   if (tokens.size() < 2) {
-    error(line, quoted(tokens[0]) + " needs a section name, e.g. '" + std::string(tokens[0]) +
-                    " shader'");
+    error(line, quoted(tokens[0]) + " needs a section name, e.g. '" + std::string(tokens[0]) + " shader'");
     return;
   }
-  if (tokens.size() > 2) warn(line, "extra text after '" + std::string(tokens[0]) + " " +
-                                        std::string(tokens[1]) + "' is ignored");
+  if (tokens.size() > 2)
+    warn(line, "extra text after '" + std::string(tokens[0]) + " " + std::string(tokens[1]) + "' is ignored");
   if (begin)
     beginSection(tokens[1], line);
   else
@@ -396,8 +383,7 @@ bool Parser::parseFloatParam(const std::vector<std::string_view>& t, BrdfParam& 
   float v[3] = {0, 0, 0};
   for (size_t i = 0; i < std::min<size_t>(numbers, 3); ++i) {
     if (!parseNumber(t[2 + i], v[i])) {
-      error(line, "float parameter " + quoted(p.name) + ": " + quoted(t[2 + i]) +
-                      " is not a number");
+      error(line, "float parameter " + quoted(p.name) + ": " + quoted(t[2 + i]) + " is not a number");
       return false;
     }
   }
@@ -409,13 +395,13 @@ bool Parser::parseFloatParam(const std::vector<std::string_view>& t, BrdfParam& 
     warn(line, "extra values after the default of " + quoted(p.name) + " are ignored");
   }
   if (v[0] > v[1]) {
-    error(line, "float parameter " + quoted(p.name) + ": min " + std::string(t[2]) +
-                    " is greater than max " + std::string(t[3]));
+    error(line, "float parameter " + quoted(p.name) + ": min " + std::string(t[2]) + " is greater than max " +
+                    std::string(t[3]));
     return false;
   }
   if (v[2] < v[0] || v[2] > v[1]) {
-    error(line, "float parameter " + quoted(p.name) + ": default " + std::string(t[4]) +
-                    " is outside [" + std::string(t[2]) + ", " + std::string(t[3]) + "]");
+    error(line, "float parameter " + quoted(p.name) + ": default " + std::string(t[4]) + " is outside [" +
+                    std::string(t[2]) + ", " + std::string(t[3]) + "]");
     return false;
   }
   p.type = ParamType::Float;
@@ -434,13 +420,11 @@ bool Parser::parseColorParam(const std::vector<std::string_view>& t, BrdfParam& 
   Vec3 c{0, 0, 0};
   for (size_t i = 0; i < 3; ++i) {
     if (!parseNumber(t[2 + i], c[i])) {
-      error(line, "color parameter " + quoted(p.name) + ": " + quoted(t[2 + i]) +
-                      " is not a number");
+      error(line, "color parameter " + quoted(p.name) + ": " + quoted(t[2 + i]) + " is not a number");
       return false;
     }
     if (c[i] < 0.0f || c[i] > 1.0f) {
-      error(line, "color parameter " + quoted(p.name) + ": component " + std::string(t[2 + i]) +
-                      " is outside [0, 1]");
+      error(line, "color parameter " + quoted(p.name) + ": component " + std::string(t[2 + i]) + " is outside [0, 1]");
       return false;
     }
   }
@@ -494,11 +478,10 @@ void Parser::handleParamLine(std::string_view text, int line) {
     return;
   }
   if (const BrdfParam* first = def_.findParam(p.name)) {
-    error(line, "parameter " + quoted(p.name) + " is already declared on line " +
-                    std::to_string(first->line));
+    error(line, "parameter " + quoted(p.name) + " is already declared on line " + std::to_string(first->line));
     return;
   }
-  bool ok = type == "float" ? parseFloatParam(t, p, line)
+  bool ok = type == "float"   ? parseFloatParam(t, p, line)
             : type == "color" ? parseColorParam(t, p, line)
                               : parseBoolParam(t, p, line);
   if (ok) def_.params.push_back(std::move(p));
@@ -522,23 +505,25 @@ bool Parser::parseLegacyWholeFile(std::string_view text) {
 
 void Parser::finish(int lastLine) {
   if (section_ != Section::None)
-    warn(lastLine, "section '" + sectionName_ + "' opened on line " +
-                       std::to_string(sectionLine_) + " has no '::end " + sectionName_ +
-                       "'; it ends at the end of the file");
+    warn(lastLine, "section '" + sectionName_ + "' opened on line " + std::to_string(sectionLine_) + " has no '::end " +
+                       sectionName_ + "'; it ends at the end of the file");
   if (shaderSectionLine_ == 0) {
-    error(0, "no '::begin shader' section: the file must define "
-             "vec3 BRDF(vec3 L, vec3 V, vec3 N, vec3 X, vec3 Y)");
+    error(0,
+          "no '::begin shader' section: the file must define "
+          "vec3 BRDF(vec3 L, vec3 V, vec3 N, vec3 X, vec3 Y)");
   } else if (!definesBrdf(def_.shader)) {
     if (definesLegacyRender(def_.shader)) {
       def_.format = BrdfFormat::Legacy;
       addLegacyParameters(def_);
     } else
-      error(shaderSectionLine_, "the shader section does not define "
-                                "vec3 BRDF(vec3 L, vec3 V, vec3 N, vec3 X, vec3 Y)");
+      error(shaderSectionLine_,
+            "the shader section does not define "
+            "vec3 BRDF(vec3 L, vec3 V, vec3 N, vec3 X, vec3 Y)");
   }
   if (sampleSectionLine_ != 0 && !definesSampler(def_.sampleShader))
-    error(sampleSectionLine_, "the sample section does not define vec3 sampleBRDF(vec2 u, "
-                              "vec3 V, vec3 N, vec3 X, vec3 Y, out vec3 L, out float pdf)");
+    error(sampleSectionLine_,
+          "the sample section does not define vec3 sampleBRDF(vec2 u, "
+          "vec3 V, vec3 N, vec3 X, vec3 Y, out vec3 L, out float pdf)");
 }
 
 Result<BrdfDefinition> Parser::run(std::string_view text) {

@@ -20,11 +20,13 @@ std::string secondsText(double s) {
   return text;
 }
 
-std::string budgetText(const CompileBudget& b) { return secondsText(b.seconds) + " / " + std::to_string(b.memoryMiB) + " MiB"; }
+std::string budgetText(const CompileBudget& b) {
+  return secondsText(b.seconds) + " / " + std::to_string(b.memoryMiB) + " MiB";
+}
 
 Error budgetError(const CompileBudget& b, const std::string& why) {
-  Error e = makeError(ErrorCode::CompileError, "the program exceeds the compile budget of " + budgetText(b) +
-                                                   " (" + why + "): simplify its macros, loops or arrays");
+  Error e = makeError(ErrorCode::CompileError, "the program exceeds the compile budget of " + budgetText(b) + " (" +
+                                                   why + "): simplify its macros, loops or arrays");
   e.diagnostics.push_back(Diagnostic{0, 0, "error", e.message});
   return e;
 }
@@ -156,8 +158,10 @@ Result<SpirvBinary> CompilePool::exchange(Worker& w, ShaderStage stage, const st
     if (ready > 0) break;
     if (ready < 0 && errno != EINTR) return fail(makeError(ErrorCode::Internal, "poll on the compile worker failed"));
     const double elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    if (elapsed > budget_.seconds) return fail(budgetError(budget_, "still compiling after " + secondsText(budget_.seconds)));
-    if (worker_process::residentBytes(w.pid) > (uint64_t(budget_.memoryMiB) << 20) + worker_process::kSanitizerResidentBytes)
+    if (elapsed > budget_.seconds)
+      return fail(budgetError(budget_, "still compiling after " + secondsText(budget_.seconds)));
+    if (worker_process::residentBytes(w.pid) >
+        (uint64_t(budget_.memoryMiB) << 20) + worker_process::kSanitizerResidentBytes)
       return fail(budgetError(budget_, "more than " + std::to_string(budget_.memoryMiB) + " MiB in use"));
   }
   std::string frame;

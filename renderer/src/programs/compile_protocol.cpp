@@ -44,9 +44,21 @@ class Reader {
   explicit Reader(const std::string& in) : in_(in) {}
   bool ok() const { return ok_; }
   bool done() const { return ok_ && at_ == in_.size(); }
-  uint32_t u32() { uint32_t v = 0; raw(&v, sizeof v); return v; }
-  int32_t i32() { int32_t v = 0; raw(&v, sizeof v); return v; }
-  double f64() { double v = 0; raw(&v, sizeof v); return v; }
+  uint32_t u32() {
+    uint32_t v = 0;
+    raw(&v, sizeof v);
+    return v;
+  }
+  int32_t i32() {
+    int32_t v = 0;
+    raw(&v, sizeof v);
+    return v;
+  }
+  double f64() {
+    double v = 0;
+    raw(&v, sizeof v);
+    return v;
+  }
   std::string str() {
     const uint32_t n = u32();
     if (!ok_ || n > in_.size() - at_) return fail(), std::string();

@@ -17,7 +17,9 @@ namespace brdfa {
 class ComputeKernel {
  public:
   ComputeKernel(VkDevice device, VkPipeline pipeline) : device_(device), pipeline_(pipeline) {}
-  ~ComputeKernel() { if (pipeline_) vkDestroyPipeline(device_, pipeline_, nullptr); }
+  ~ComputeKernel() {
+    if (pipeline_) vkDestroyPipeline(device_, pipeline_, nullptr);
+  }
   ComputeKernel(const ComputeKernel&) = delete;
   ComputeKernel& operator=(const ComputeKernel&) = delete;
   VkPipeline pipeline() const { return pipeline_; }

@@ -34,10 +34,8 @@ EShLanguage toGlslangStage(ShaderStage stage) {
 }
 
 std::string_view trim(std::string_view s) {
-  while (!s.empty() && (s.front() == ' ' || s.front() == '\t' || s.front() == '\r'))
-    s.remove_prefix(1);
-  while (!s.empty() && (s.back() == ' ' || s.back() == '\t' || s.back() == '\r'))
-    s.remove_suffix(1);
+  while (!s.empty() && (s.front() == ' ' || s.front() == '\t' || s.front() == '\r')) s.remove_prefix(1);
+  while (!s.empty() && (s.back() == ' ' || s.back() == '\t' || s.back() == '\r')) s.remove_suffix(1);
   return s;
 }
 
@@ -103,9 +101,11 @@ void readLocation(std::string_view& rest, RawMessage& msg) {
 //   ERROR: Linking compute stage: Missing entry point: Each stage requires one entry point
 // Lines without a known prefix continue the previous message.
 std::vector<RawMessage> parseInfoLog(std::string_view log) {
-  static constexpr std::pair<std::string_view, const char*> kPrefixes[] = {
-      {"ERROR: ", "error"},         {"WARNING: ", "warning"}, {"INTERNAL ERROR: ", "error"},
-      {"UNIMPLEMENTED: ", "error"}, {"NOTE: ", "warning"}};
+  static constexpr std::pair<std::string_view, const char*> kPrefixes[] = {{"ERROR: ", "error"},
+                                                                           {"WARNING: ", "warning"},
+                                                                           {"INTERNAL ERROR: ", "error"},
+                                                                           {"UNIMPLEMENTED: ", "error"},
+                                                                           {"NOTE: ", "warning"}};
   std::vector<RawMessage> out;
   size_t start = 0;
   while (start < log.size()) {
@@ -151,10 +151,8 @@ Diagnostic toDiagnostic(const RawMessage& m) {
 // User lines first, in line order; then the rest in the order glslang reported them.
 std::vector<Diagnostic> toDiagnostics(const std::vector<RawMessage>& raw) {
   std::vector<RawMessage> user, other;
-  for (const RawMessage& m : raw)
-    (m.located && m.sourceString == kUserSourceString ? user : other).push_back(m);
-  std::stable_sort(user.begin(), user.end(),
-                   [](const RawMessage& a, const RawMessage& b) { return a.line < b.line; });
+  for (const RawMessage& m : raw) (m.located && m.sourceString == kUserSourceString ? user : other).push_back(m);
+  std::stable_sort(user.begin(), user.end(), [](const RawMessage& a, const RawMessage& b) { return a.line < b.line; });
   std::vector<Diagnostic> out;
   for (const RawMessage& m : user) out.push_back(toDiagnostic(m));
   for (const RawMessage& m : other) out.push_back(toDiagnostic(m));
@@ -170,8 +168,8 @@ std::vector<Diagnostic> warningsOf(const std::vector<Diagnostic>& all) {
 
 Error compileError(std::vector<Diagnostic> diagnostics, const std::string& fallback) {
   std::string message = "GLSL compilation failed";
-  auto first = std::find_if(diagnostics.begin(), diagnostics.end(),
-                            [](const Diagnostic& d) { return d.severity == "error"; });
+  auto first =
+      std::find_if(diagnostics.begin(), diagnostics.end(), [](const Diagnostic& d) { return d.severity == "error"; });
   if (first != diagnostics.end()) {
     message += ": ";
     if (first->line > 0) message += "line " + std::to_string(first->line) + ": ";
@@ -204,18 +202,16 @@ Result<SpirvBinary> compileLocked(ShaderStage stage, const std::string& source) 
 
   const bool parsed = shader.parse(GetDefaultResources(), 450, false, messages);
   std::vector<RawMessage> raw = parseInfoLog(shader.getInfoLog());
-  if (!parsed) return compileError(toDiagnostics(raw), trim(shader.getInfoLog()).empty()
-                                                         ? "parse failed"
-                                                         : shader.getInfoLog());
+  if (!parsed)
+    return compileError(toDiagnostics(raw), trim(shader.getInfoLog()).empty() ? "parse failed" : shader.getInfoLog());
 
   glslang::TProgram program;
   program.addShader(&shader);
   const bool linked = program.link(messages);
   std::vector<RawMessage> linkRaw = parseInfoLog(program.getInfoLog());
   raw.insert(raw.end(), linkRaw.begin(), linkRaw.end());
-  if (!linked) return compileError(toDiagnostics(raw), trim(program.getInfoLog()).empty()
-                                                         ? "link failed"
-                                                         : program.getInfoLog());
+  if (!linked)
+    return compileError(toDiagnostics(raw), trim(program.getInfoLog()).empty() ? "link failed" : program.getInfoLog());
 
   SpirvBinary out;
   spv::SpvBuildLogger logger;
@@ -227,8 +223,7 @@ Result<SpirvBinary> compileLocked(ShaderStage stage, const std::string& source) 
   out.warnings = warningsOf(toDiagnostics(raw));
   if (const std::string spvLog = logger.getAllMessages(); !trim(spvLog).empty())
     out.warnings.push_back(Diagnostic{0, 0, "warning", std::string(trim(spvLog))});
-  if (out.words.empty())
-    return makeError(ErrorCode::Internal, "glslang produced no SPIR-V for a valid program");
+  if (out.words.empty()) return makeError(ErrorCode::Internal, "glslang produced no SPIR-V for a valid program");
   return out;
 }
 
@@ -241,9 +236,7 @@ Result<SpirvBinary> compileGlsl(ShaderStage stage, const std::string& source) {
     const auto start = std::chrono::steady_clock::now();
     Result<SpirvBinary> result = compileLocked(stage, source);
     if (result.ok())
-      result->compileMs =
-          std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start)
-              .count();
+      result->compileMs = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
     return result;
   } catch (const std::exception& e) {
     // glslang can throw (e.g. std::bad_alloc); nothing may escape the renderer's API.
@@ -256,10 +249,9 @@ Result<SpirvBinary> compileGlsl(ShaderStage stage, const std::string& source) {
 std::string compilerVersion() {
   // Both the headers we built against and the library we run with, plus our fixed targets:
   // any change means previously cached SPIR-V may differ.
-  return "glslang " + std::to_string(GLSLANG_VERSION_MAJOR) + "." +
-         std::to_string(GLSLANG_VERSION_MINOR) + "." + std::to_string(GLSLANG_VERSION_PATCH) +
-         GLSLANG_VERSION_FLAVOR + " (" + glslang::GetGlslVersionString() + ", tool " +
-         std::to_string(glslang::GetKhronosToolId()) + "); vulkan1.1 spirv1.3";
+  return "glslang " + std::to_string(GLSLANG_VERSION_MAJOR) + "." + std::to_string(GLSLANG_VERSION_MINOR) + "." +
+         std::to_string(GLSLANG_VERSION_PATCH) + GLSLANG_VERSION_FLAVOR + " (" + glslang::GetGlslVersionString() +
+         ", tool " + std::to_string(glslang::GetKhronosToolId()) + "); vulkan1.1 spirv1.3";
 }
 
 }  // namespace brdfa

@@ -24,13 +24,19 @@ Result<void> PipelineLayouts::create() {
   VkDevice d = device_;
   // Set 0: one view's G-buffer, accumulators, counters, environment and outputs
   // (bindings as in shaders/lib/bindings.glsl).
-  const std::array<std::pair<uint32_t, VkDescriptorType>, 12> viewBindings = {{
-      {0, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER},         {3, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER},
-      {4, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER},         {5, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER},
-      {6, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER},         {7, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER},
-      {8, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER},         {9, VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER},
-      {10, VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER},  {11, VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER},
-      {12, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER},        {13, VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER}}};
+  const std::array<std::pair<uint32_t, VkDescriptorType>, 12> viewBindings = {
+      {{0, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER},
+       {3, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER},
+       {4, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER},
+       {5, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER},
+       {6, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER},
+       {7, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER},
+       {8, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER},
+       {9, VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER},
+       {10, VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER},
+       {11, VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER},
+       {12, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER},
+       {13, VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER}}};
   std::array<VkDescriptorSetLayoutBinding, viewBindings.size()> view{};
   for (size_t i = 0; i < view.size(); ++i)
     view[i] = {viewBindings[i].first, viewBindings[i].second, 1, VK_SHADER_STAGE_COMPUTE_BIT, nullptr};
@@ -43,7 +49,8 @@ Result<void> PipelineLayouts::create() {
   // iTexture0..3 (shading; lib/brdf_inputs.glsl).
   std::array<VkDescriptorSetLayoutBinding, 6> object{};
   object[0] = {0, VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, 1, VK_SHADER_STAGE_COMPUTE_BIT, nullptr};
-  object[1] = {1, VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, 1, VK_SHADER_STAGE_VERTEX_BIT | VK_SHADER_STAGE_FRAGMENT_BIT, nullptr};
+  object[1] = {1, VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, 1, VK_SHADER_STAGE_VERTEX_BIT | VK_SHADER_STAGE_FRAGMENT_BIT,
+               nullptr};
   for (uint32_t t = 0; t < 4; ++t)
     object[2 + t] = {2 + t, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, 1, VK_SHADER_STAGE_COMPUTE_BIT, nullptr};
   li.bindingCount = static_cast<uint32_t>(object.size());
@@ -79,7 +86,8 @@ Result<void> PipelineLayouts::create() {
     att[i].stencilLoadOp = VK_ATTACHMENT_LOAD_OP_DONT_CARE;
     att[i].stencilStoreOp = VK_ATTACHMENT_STORE_OP_DONT_CARE;
     att[i].initialLayout = VK_IMAGE_LAYOUT_UNDEFINED;
-    att[i].finalLayout = color ? VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL : VK_IMAGE_LAYOUT_DEPTH_STENCIL_ATTACHMENT_OPTIMAL;
+    att[i].finalLayout =
+        color ? VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL : VK_IMAGE_LAYOUT_DEPTH_STENCIL_ATTACHMENT_OPTIMAL;
   }
   VkAttachmentReference colors[2] = {{0, VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL},
                                      {1, VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL}};
@@ -91,13 +99,21 @@ Result<void> PipelineLayouts::create() {
   sub.pDepthStencilAttachment = &depth;
   std::array<VkSubpassDependency, 2> deps{};
   // Earlier copies out of the targets finish before they are cleared and rewritten.
-  deps[0] = {VK_SUBPASS_EXTERNAL, 0, VK_PIPELINE_STAGE_TRANSFER_BIT,
-             VK_PIPELINE_STAGE_COLOR_ATTACHMENT_OUTPUT_BIT | VK_PIPELINE_STAGE_EARLY_FRAGMENT_TESTS_BIT, 0,
-             VK_ACCESS_COLOR_ATTACHMENT_WRITE_BIT | VK_ACCESS_DEPTH_STENCIL_ATTACHMENT_WRITE_BIT, 0};
+  deps[0] = {VK_SUBPASS_EXTERNAL,
+             0,
+             VK_PIPELINE_STAGE_TRANSFER_BIT,
+             VK_PIPELINE_STAGE_COLOR_ATTACHMENT_OUTPUT_BIT | VK_PIPELINE_STAGE_EARLY_FRAGMENT_TESTS_BIT,
+             0,
+             VK_ACCESS_COLOR_ATTACHMENT_WRITE_BIT | VK_ACCESS_DEPTH_STENCIL_ATTACHMENT_WRITE_BIT,
+             0};
   // The written targets are visible to the copy into the G-buffer storage buffer.
-  deps[1] = {0, VK_SUBPASS_EXTERNAL, VK_PIPELINE_STAGE_COLOR_ATTACHMENT_OUTPUT_BIT,
-             VK_PIPELINE_STAGE_TRANSFER_BIT, VK_ACCESS_COLOR_ATTACHMENT_WRITE_BIT,
-             VK_ACCESS_TRANSFER_READ_BIT, 0};
+  deps[1] = {0,
+             VK_SUBPASS_EXTERNAL,
+             VK_PIPELINE_STAGE_COLOR_ATTACHMENT_OUTPUT_BIT,
+             VK_PIPELINE_STAGE_TRANSFER_BIT,
+             VK_ACCESS_COLOR_ATTACHMENT_WRITE_BIT,
+             VK_ACCESS_TRANSFER_READ_BIT,
+             0};
   VkRenderPassCreateInfo rpi{VK_STRUCTURE_TYPE_RENDER_PASS_CREATE_INFO};
   rpi.attachmentCount = static_cast<uint32_t>(att.size());
   rpi.pAttachments = att.data();

@@ -42,9 +42,7 @@ void appendLine(std::string& out, const std::string& text) {
   if (out.empty() || out.back() != '\n') out.push_back('\n');
 }
 
-int countLines(const std::string& text) {
-  return static_cast<int>(std::count(text.begin(), text.end(), '\n'));
-}
+int countLines(const std::string& text) { return static_cast<int>(std::count(text.begin(), text.end(), '\n')); }
 
 // `#line <k> 0` such that the line after the directive has its true number in `out`, which
 // keeps generated-code messages readable against a dump of the assembled source.
@@ -73,6 +71,8 @@ void writeUint(std::vector<uint8_t>& bytes, uint32_t offset, uint32_t v) {
 // text unchanged and gives the old meaning: every use of the name in the user's sections is
 // the user's function. Renaming a name that is not a built-in would also be harmless.
 const std::unordered_set<std::string>& builtinFunctionNames() {
+  // A word list, grouped as the GLSL specification groups it.
+  // clang-format off
   static const std::unordered_set<std::string> names = {
       // angle and trigonometry, exponential, common
       "radians", "degrees", "sin", "cos", "tan", "asin", "acos", "atan", "sinh", "cosh", "tanh",
@@ -116,6 +116,7 @@ const std::unordered_set<std::string>& builtinFunctionNames() {
       "memoryBarrierImage", "groupMemoryBarrier", "EmitVertex", "EndPrimitive",
       "EmitStreamVertex", "EndStreamPrimitive",
   };
+  // clang-format on
   return names;
 }
 
@@ -135,8 +136,15 @@ void collectBuiltinOverrides(const std::string& text, std::vector<std::string>& 
   bool lineStart = true;
   while (i < n) {
     char c = text[i];
-    if (c == '\n') { lineStart = true; ++i; continue; }
-    if (c == ' ' || c == '\t' || c == '\r' || c == '\f' || c == '\v') { ++i; continue; }
+    if (c == '\n') {
+      lineStart = true;
+      ++i;
+      continue;
+    }
+    if (c == ' ' || c == '\t' || c == '\r' || c == '\f' || c == '\v') {
+      ++i;
+      continue;
+    }
     if (c == '/' && i + 1 < n && text[i + 1] == '/') {
       while (i < n && text[i] != '\n') ++i;
       continue;
@@ -161,16 +169,20 @@ void collectBuiltinOverrides(const std::string& text, std::vector<std::string>& 
       std::string ident = text.substr(start, i - start);
       size_t j = i;
       while (j < n && (text[j] == ' ' || text[j] == '\t' || text[j] == '\r' || text[j] == '\n')) ++j;
-      if (braceDepth == 0 && parenDepth == 0 && prevWasIdent && j < n && text[j] == '(' &&
-          builtins.count(ident) && std::find(out.begin(), out.end(), ident) == out.end())
+      if (braceDepth == 0 && parenDepth == 0 && prevWasIdent && j < n && text[j] == '(' && builtins.count(ident) &&
+          std::find(out.begin(), out.end(), ident) == out.end())
         out.push_back(ident);
       prevWasIdent = true;
       continue;
     }
-    if (c == '{') ++braceDepth;
-    else if (c == '}') braceDepth = std::max(0, braceDepth - 1);
-    else if (c == '(') ++parenDepth;
-    else if (c == ')') parenDepth = std::max(0, parenDepth - 1);
+    if (c == '{')
+      ++braceDepth;
+    else if (c == '}')
+      braceDepth = std::max(0, braceDepth - 1);
+    else if (c == '(')
+      ++parenDepth;
+    else if (c == ')')
+      parenDepth = std::max(0, parenDepth - 1);
     // `]` closes an array return type (`float[2] f(`); keep it acting like a type name.
     prevWasIdent = (c == ']');
     ++i;
@@ -258,10 +270,14 @@ class TermCollector {
       if (end == std::string::npos) end = text.size();
       const std::string_view line(text.data() + at, end - at);
       const TermInclude inc = parseTermInclude(line);
-      if (!inc.isInclude) out.append(line);
-      else if (!inc.error.empty()) out += "#error malformed include - name a shared term as terms/NAME.glsl";
-      else if (!terms_.count(inc.path)) out += "#error unknown shared term " + termName(inc.path) + " - " + known();
-      else add(inc.path);
+      if (!inc.isInclude)
+        out.append(line);
+      else if (!inc.error.empty())
+        out += "#error malformed include - name a shared term as terms/NAME.glsl";
+      else if (!terms_.count(inc.path))
+        out += "#error unknown shared term " + termName(inc.path) + " - " + known();
+      else
+        add(inc.path);
       if (end < text.size()) out.push_back('\n');
       at = end + 1;
     }
@@ -308,8 +324,8 @@ TermInclude parseTermInclude(std::string_view line) {
     return r;
   }
   const std::string_view path = arg.substr(1, arg.size() - 2);
-  if (path.starts_with('/') || path.find("..") != std::string_view::npos ||
-      path.find('\\') != std::string_view::npos || path.find(':') != std::string_view::npos) {
+  if (path.starts_with('/') || path.find("..") != std::string_view::npos || path.find('\\') != std::string_view::npos ||
+      path.find(':') != std::string_view::npos) {
     r.error = includeError(arg, "the path may not leave shaders/lib/terms");
     return r;
   }
@@ -421,8 +437,7 @@ AssembledProgram assembleProgram(const ProgramSpec& spec) {
     }
 
     appendUserText(s, shader, spec.brdf->shaderFirstLine);
-    if (spec.brdf->hasSampler())
-      appendUserText(s, sampleShader, spec.brdf->sampleFirstLine);
+    if (spec.brdf->hasSampler()) appendUserText(s, sampleShader, spec.brdf->sampleFirstLine);
     for (const std::string& name : renamed) s += "#undef " + name + "\n";
     // The BRDF's own macros end with its text: none may rewrite the integrator's code.
     collectDefinedMacros(spec.brdf->shader, macros);

@@ -56,13 +56,13 @@ std::shared_ptr<const TermSources> defaultTermSources();
 
 struct ProgramSpec {
   const BrdfDefinition* brdf = nullptr;
-  std::vector<std::string> defines;       // "NAME" or "NAME VALUE", emitted as #define in the prelude
+  std::vector<std::string> defines;  // "NAME" or "NAME VALUE", emitted as #define in the prelude
   // GLSL text of shaders/lib pieces, in order. userChunks come before the BRDF's text (what it
   // may read: its inputs); commonChunks after it, so the BRDF's text cannot name the
   // integrator's resources, and the macros it defines are #undef'd before them.
   std::vector<std::string> userChunks;
   std::vector<std::string> commonChunks;
-  std::string integrator;                 // kernel text containing main()
+  std::string integrator;  // kernel text containing main()
   // Where the BRDF's `#include "terms/<name>.glsl"` lines resolve; null: defaultTermSources().
   const TermSources* terms = nullptr;
 };

@@ -46,10 +46,14 @@ void dropUnusedEntries(Map& cache, std::deque<uint64_t>& order, uint64_t needed,
 }  // namespace
 
 const std::vector<std::string>& shadeLibPieces() {
-  static const std::vector<std::string> pieces = {"lib/bindings.glsl",      "lib/gbuffer_encoding.glsl",
-                                                  "lib/random.glsl",        "lib/frame.glsl",
-                                                  "lib/sampling.glsl",      "lib/environment.glsl",
-                                                  "lib/environment_sampling.glsl", "lib/shade_pixel.glsl"};
+  static const std::vector<std::string> pieces = {"lib/bindings.glsl",
+                                                  "lib/gbuffer_encoding.glsl",
+                                                  "lib/random.glsl",
+                                                  "lib/frame.glsl",
+                                                  "lib/sampling.glsl",
+                                                  "lib/environment.glsl",
+                                                  "lib/environment_sampling.glsl",
+                                                  "lib/shade_pixel.glsl"};
   return pieces;
 }
 
@@ -189,10 +193,19 @@ ShadeVariant shadeVariant(const BrdfDefinition& brdf, SamplingMode sampling, boo
     }
   };
   switch (sampling) {
-    case SamplingMode::Cosine: v.define = "BRDFA_SAMPLING_COSINE"; v.estimator = "cosine"; break;
-    case SamplingMode::Uniform: v.define = "BRDFA_SAMPLING_UNIFORM"; v.estimator = "uniform"; break;
+    case SamplingMode::Cosine:
+      v.define = "BRDFA_SAMPLING_COSINE";
+      v.estimator = "cosine";
+      break;
+    case SamplingMode::Uniform:
+      v.define = "BRDFA_SAMPLING_UNIFORM";
+      v.estimator = "uniform";
+      break;
     case SamplingMode::Brdf: brdfSide(false); break;
-    case SamplingMode::Environment: v.define = "BRDFA_SAMPLING_ENVIRONMENT"; v.estimator = "environment"; break;
+    case SamplingMode::Environment:
+      v.define = "BRDFA_SAMPLING_ENVIRONMENT";
+      v.estimator = "environment";
+      break;
     case SamplingMode::Mis:
       if (constantEnv) {
         // A constant environment adds no shape to the integrand: the BRDF side alone is the
@@ -205,8 +218,9 @@ ShadeVariant shadeVariant(const BrdfDefinition& brdf, SamplingMode sampling, boo
       v.misFileSampler = pdf;
       v.estimator = pdf ? "mis(environment+brdf)" : "mis(environment+cosine)";
       if (sampler && !pdf)
-        v.warnings.push_back("sampleBRDF without pdfBRDF cannot take part in MIS: mis combines the environment "
-                             "with cosine sampling");
+        v.warnings.push_back(
+            "sampleBRDF without pdfBRDF cannot take part in MIS: mis combines the environment "
+            "with cosine sampling");
       break;
   }
   return v;
@@ -248,7 +262,8 @@ int lineOfName(const BrdfDefinition& brdf, const std::string& name) {
     for (size_t at = 0; at < text.size();) {
       size_t end = text.find('\n', at);
       if (end == std::string::npos) end = text.size();
-      for (size_t i = text.find(name, at); i != std::string::npos && i + name.size() <= end; i = text.find(name, i + 1)) {
+      for (size_t i = text.find(name, at); i != std::string::npos && i + name.size() <= end;
+           i = text.find(name, i + 1)) {
         auto ident = [](char c) { return std::isalnum(static_cast<unsigned char>(c)) || c == '_'; };
         if ((i == at || !ident(text[i - 1])) && (i + name.size() == text.size() || !ident(text[i + name.size()])))
           return line;
@@ -268,10 +283,11 @@ Result<void> ProgramCache::checkResources(const SpirvBinary& code, const BrdfDef
   static const std::set<std::string> aliases = {"skybox"};
   const std::vector<ForeignResource> foreign = foreignResources(code.words, computeSlots_, aliases);
   if (foreign.empty()) return {};
-  Error e = makeError(ErrorCode::CompileError,
-                      "a BRDF file may read its parameters, iTexture0..3 and texCoord, and declare no resources of its "
-                      "own: it declares " +
-                          foreign.front().what + (foreign.front().name.empty() ? "" : " ('" + foreign.front().name + "')"));
+  Error e =
+      makeError(ErrorCode::CompileError,
+                "a BRDF file may read its parameters, iTexture0..3 and texCoord, and declare no resources of its "
+                "own: it declares " +
+                    foreign.front().what + (foreign.front().name.empty() ? "" : " ('" + foreign.front().name + "')"));
   for (const ForeignResource& f : foreign)
     e.diagnostics.push_back(Diagnostic{brdf ? lineOfName(*brdf, f.name) : 0, 0, "error",
                                        "declares " + f.what + (f.name.empty() ? "" : " ('" + f.name + "')") +
@@ -292,9 +308,10 @@ Result<CompileInfo> ProgramCache::compileBrdf(const BrdfDefinition& brdf) {
     Diagnostic d;
     d.severity = "warning";
     d.line = brdf.sampleFirstLine;
-    d.message = "the sample section defines no pdfBRDF(L, V, N, X, Y): sampleBRDF cannot take part in multiple "
-                "importance sampling (\"mis\" combines the environment with cosine sampling instead), and the "
-                "sampler check cannot run its chi-square test";
+    d.message =
+        "the sample section defines no pdfBRDF(L, V, N, X, Y): sampleBRDF cannot take part in multiple "
+        "importance sampling (\"mis\" combines the environment with cosine sampling instead), and the "
+        "sampler check cannot run its chi-square test";
     info.warnings.push_back(d);
   }
   info.warnings.insert(info.warnings.end(), (*code)->warnings.begin(), (*code)->warnings.end());
@@ -303,7 +320,7 @@ Result<CompileInfo> ProgramCache::compileBrdf(const BrdfDefinition& brdf) {
 }
 
 Result<ShadeKernels> ProgramCache::shadeKernels(const BrdfDefinition& brdf, const ShadeVariant& variant,
-                                                             bool constantEnv, bool preview) {
+                                                bool constantEnv, bool preview) {
   const AssembledProgram program = assembleShadeProgram(brdf, variant, constantEnv);
   std::optional<AssembledProgram> previewProgram;
   std::future<void> previewGlsl;
@@ -318,8 +335,9 @@ Result<ShadeKernels> ProgramCache::shadeKernels(const BrdfDefinition& brdf, cons
       previewProgram = assembleShadeProgram(brdf, shadeVariant(brdf, SamplingMode::Cosine, constantEnv), constantEnv,
                                             /*preview=*/true);
       // Into the SPIR-V cache, beside the kernel's compile (spirv() lets one wait for the other).
-      previewGlsl = std::async(std::launch::async,
-                               [this, source = previewProgram->source] { (void)spirv(ShaderStage::Compute, source, nullptr); });
+      previewGlsl = std::async(std::launch::async, [this, source = previewProgram->source] {
+        (void)spirv(ShaderStage::Compute, source, nullptr);
+      });
     }
   }
   auto kernel = compiledKernel(program);
@@ -338,7 +356,8 @@ Result<int> ProgramCache::preloadFromCache(const BrdfDefinition& brdf) {
     if (sampling == SamplingMode::Brdf && !brdf.hasSampler()) continue;  // same program as cosine
     for (bool constantEnv : {false, true}) {
       bool created = false;
-      auto kernel = compiledKernel(assembleShadeProgram(brdf, sampling, constantEnv), /*compileOnMiss=*/false, &created);
+      auto kernel =
+          compiledKernel(assembleShadeProgram(brdf, sampling, constantEnv), /*compileOnMiss=*/false, &created);
       if (!kernel) {
         if (kernel.error().code == ErrorCode::NotFound) continue;  // never compiled before
         return kernel.takeError();
@@ -387,11 +406,11 @@ AssembledProgram ProgramCache::assembleCheckProgram(const BrdfDefinition& brdf, 
   spec.terms = &sources_.terms();
   const BrdfFeatures features = detectFeatures(brdf);
   if (features.textures) spec.defines.push_back("BRDFA_TEXTURES");
-  if (features.samplerPdf) spec.defines.push_back("BRDFA_HAS_PDF");  // check_sampler: chi-square test
+  if (features.samplerPdf) spec.defines.push_back("BRDFA_HAS_PDF");    // check_sampler: chi-square test
   if (brdf.hasSampler()) spec.defines.push_back("BRDFA_HAS_SAMPLER");  // lib/albedo.glsl: importance sampling
   spec.userChunks.push_back(sources_.get("lib/brdf_inputs.glsl"));
-  for (const char* piece : {"lib/bindings.glsl", "lib/random.glsl", "lib/sampling.glsl", "lib/environment_sampling.glsl",
-                            "lib/albedo.glsl"})
+  for (const char* piece : {"lib/bindings.glsl", "lib/random.glsl", "lib/sampling.glsl",
+                            "lib/environment_sampling.glsl", "lib/albedo.glsl"})
     spec.commonChunks.push_back(sources_.get(piece));
   spec.integrator = sources_.get(std::string("kernels/") + kernel);
   return assembleProgram(spec);
@@ -406,8 +425,7 @@ void ProgramCache::addCounters(RendererCounters& c) const {
   c.pipelinesCreated = pipelinesCreated_.load();
 }
 
-void ProgramCache::dropUnused(uint64_t needed, bool kernelLockHeld, uint64_t& freed, int& programs,
-                              int& spirvModules) {
+void ProgramCache::dropUnused(uint64_t needed, bool kernelLockHeld, uint64_t& freed, int& programs, int& spirvModules) {
   underFreeLock(kernelMutex_, kernelLockHeld, [&] {
     dropUnusedEntries(kernelCache_, kernelOrder_, needed, freed, programs,
                       [&](uint64_t key) { return kernelCache_.at(key)->memory.bytes(); });

@@ -32,9 +32,9 @@ namespace brdfa {
 // What the shade kernel runs for a BRDF, a sampling mode and an environment kind.
 struct ShadeVariant {
   const char* define = "BRDFA_SAMPLING_COSINE";  // the integrator's strategy (kernels/shade.comp.glsl)
-  bool useSampler = false;      // the file's sample section is compiled in
-  bool misFileSampler = false;  // mis draws its BRDF side from sampleBRDF/pdfBRDF
-  std::string estimator;        // FrameStats::estimator
+  bool useSampler = false;                       // the file's sample section is compiled in
+  bool misFileSampler = false;                   // mis draws its BRDF side from sampleBRDF/pdfBRDF
+  std::string estimator;                         // FrameStats::estimator
   std::vector<std::string> warnings;
 };
 ShadeVariant shadeVariant(const BrdfDefinition& brdf, SamplingMode sampling, bool constantEnv);
@@ -90,8 +90,8 @@ class ProgramCache {
   AssembledProgram assembleCheckProgram(const BrdfDefinition& brdf, const char* kernel) const;
   // The pipeline of an assembled program; compiled once, then served from the cache.
   // `created` (optional) tells whether this call built the pipeline.
-  Result<std::shared_ptr<const ShadeKernel>> compiledKernel(const AssembledProgram& program,
-                                                            bool compileOnMiss = true, bool* created = nullptr);
+  Result<std::shared_ptr<const ShadeKernel>> compiledKernel(const AssembledProgram& program, bool compileOnMiss = true,
+                                                            bool* created = nullptr);
 
   // The compile and cache counters of RendererCounters (memory aside).
   void addCounters(RendererCounters& c) const;
@@ -126,7 +126,7 @@ class ProgramCache {
   std::condition_variable spirvDone_;
   std::unordered_map<uint64_t, std::shared_ptr<const SpirvBinary>> spirvCache_;
   std::unordered_map<uint64_t, MemoryReservation> spirvMemory_;  // what each entry above holds
-  std::deque<uint64_t> spirvOrder_;  // insertion order, for a bounded cache
+  std::deque<uint64_t> spirvOrder_;                              // insertion order, for a bounded cache
 
   std::mutex kernelMutex_;
   std::unordered_map<uint64_t, std::shared_ptr<const ShadeKernel>> kernelCache_;

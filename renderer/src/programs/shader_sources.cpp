@@ -15,8 +15,7 @@ Result<ShaderSources> ShaderSources::load(const std::string& shaderDir) {
     std::error_code ec;
     // lib/terms is optional, so an older shader tree (a bench's A/B side) still loads.
     if (!fs::is_directory(dir, ec) && std::string_view(sub) == "lib/terms") continue;
-    if (!fs::is_directory(dir, ec))
-      return makeError(ErrorCode::NotFound, "shader folder not found: " + dir.string());
+    if (!fs::is_directory(dir, ec)) return makeError(ErrorCode::NotFound, "shader folder not found: " + dir.string());
     for (const auto& entry : fs::directory_iterator(dir, ec)) {
       if (!entry.is_regular_file()) continue;
       std::ifstream in(entry.path(), std::ios::binary);

@@ -69,9 +69,7 @@ std::vector<ForeignResource> foreignResources(const std::vector<uint32_t>& words
         if (!builtIns.count(v.id)) out.push_back({name, "an interface variable (in/out)"});
         break;
       case kWorkgroup:
-      case kCrossWorkgroup:
-        out.push_back({name, "shared memory"});
-        break;
+      case kCrossWorkgroup: out.push_back({name, "shared memory"}); break;
       case kUniformConstant:
       case kUniform:
       case kImage:
@@ -84,8 +82,7 @@ std::vector<ForeignResource> foreignResources(const std::vector<uint32_t>& words
           declared[slot].push_back(name);
         break;
       }
-      default:
-        break;  // Function, Private, PushConstant (a second push-constant block is a GLSL error)
+      default: break;  // Function, Private, PushConstant (a second push-constant block is a GLSL error)
     }
   }
   // A BRDF's text comes before the integrator's declarations (program_assembler.h), so of two

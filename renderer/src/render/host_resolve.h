@@ -18,8 +18,8 @@ struct ErrorSums {
 };
 
 struct HostResolveInput {
-  const float* accum = nullptr;     // 2 * pixels RGBA: half A then half B (rgb sum, count)
-  const uint32_t* surface = nullptr; // pixels x 2, the G-buffer's surface plane (x != 0: object)
+  const float* accum = nullptr;       // 2 * pixels RGBA: half A then half B (rgb sum, count)
+  const uint32_t* surface = nullptr;  // pixels x 2, the G-buffer's surface plane (x != 0: object)
   size_t pixels = 0;
   float exposureScale = 1;
   ToneMap toneMap = ToneMap::Clamp;  // applied after exposure, before the sRGB encoding

@@ -42,11 +42,10 @@ Result<std::shared_ptr<LocalRenderer>> LocalRenderer::create(const RendererOptio
 Result<void> LocalRenderer::init(const RendererOptions& options) {
   auto diskCache = std::make_unique<SpirvDiskCache>(options.cacheDir, options.loadCache);
   ledger_ = std::make_unique<MemoryLedger>(options.memoryBudgetBytes, options.memoryBudgetLabel);
-  const size_t workers = options.compileWorkers > 0
-                             ? options.compileWorkers
-                             : std::max<size_t>(2, std::thread::hardware_concurrency());
-  auto compilePool = std::make_unique<CompilePool>(CompilePool::findWorker(),
-                                                   CompileBudget{options.compileSeconds, options.compileMemoryMiB}, workers);
+  const size_t workers =
+      options.compileWorkers > 0 ? options.compileWorkers : std::max<size_t>(2, std::thread::hardware_concurrency());
+  auto compilePool = std::make_unique<CompilePool>(
+      CompilePool::findWorker(), CompileBudget{options.compileSeconds, options.compileMemoryMiB}, workers);
   if (!options.driverCacheDir.empty()) {
     std::error_code ec;
     std::filesystem::create_directories(options.driverCacheDir, ec);
@@ -58,8 +57,8 @@ Result<void> LocalRenderer::init(const RendererOptions& options) {
   if (!ctx) return ctx.takeError();
   ctx_ = std::move(ctx.value());
   profilePasses_ = options.profilePasses;
-  hostResolve_ = options.resolve == ResolveMode::Host ||
-                 (options.resolve == ResolveMode::Auto && ctx_->info().type == "cpu");
+  hostResolve_ =
+      options.resolve == ResolveMode::Host || (options.resolve == ResolveMode::Auto && ctx_->info().type == "cpu");
   layouts_ = std::make_unique<PipelineLayouts>(ctx_->device());
   BRDFA_TRY(layouts_->create());
   auto shrinkerFor = [this](HeldCacheLocks held) { return shrinker(held); };
@@ -75,13 +74,15 @@ Result<void> LocalRenderer::init(const RendererOptions& options) {
 }
 
 Result<void> LocalRenderer::createFixedKernels() {
-  auto resolve = programs_->compileFixedKernel({}, {"lib/bindings.glsl", "lib/gbuffer_encoding.glsl", "lib/tonemap.glsl", "kernels/resolve.comp.glsl"},
-                                    {"GL_KHR_shader_subgroup_arithmetic"});
+  auto resolve = programs_->compileFixedKernel(
+      {}, {"lib/bindings.glsl", "lib/gbuffer_encoding.glsl", "lib/tonemap.glsl", "kernels/resolve.comp.glsl"},
+      {"GL_KHR_shader_subgroup_arithmetic"});
   if (!resolve) return resolve.takeError();
   resolve_ = std::move(resolve.value());
   for (bool constant : {true, false}) {
-    auto bg = programs_->compileFixedKernel({constant ? "BRDFA_ENV_CONSTANT" : "BRDFA_ENV_CUBEMAP"},
-                                 {"lib/bindings.glsl", "lib/gbuffer_encoding.glsl", "lib/environment.glsl", "kernels/background.comp.glsl"});
+    auto bg = programs_->compileFixedKernel(
+        {constant ? "BRDFA_ENV_CONSTANT" : "BRDFA_ENV_CUBEMAP"},
+        {"lib/bindings.glsl", "lib/gbuffer_encoding.glsl", "lib/environment.glsl", "kernels/background.comp.glsl"});
     if (!bg) return bg.takeError();
     (constant ? backgroundConstant_ : backgroundCube_) = std::move(bg.value());
     if (!compilesAtFirstDispatch()) continue;  // the preview kernel's stages: CPU devices only
@@ -96,7 +97,8 @@ Result<void> LocalRenderer::createFixedKernels() {
   if (compilesAtFirstDispatch()) {
     // Writes through lib/shade_pixel.glsl, which needs the pieces before it (the environment
     // kind does not matter to the writes).
-    auto scatter = programs_->compileFixedKernel({"BRDFA_ENV_CONSTANT"}, previewStagePieces({"kernels/preview_scatter.comp.glsl"}));
+    auto scatter = programs_->compileFixedKernel({"BRDFA_ENV_CONSTANT"},
+                                                 previewStagePieces({"kernels/preview_scatter.comp.glsl"}));
     if (!scatter) return scatter.takeError();
     previewScatter_ = std::move(scatter.value());
   }
@@ -115,7 +117,8 @@ void LocalRenderer::reserveFixedMemory(const RendererOptions& options, size_t wo
   ledger_->add(MemoryUse::Compiles, workers * (compileCap - idle));
   // This process may grow into whatever of the budget the other processes do not hold.
   const uint64_t others = (own + workers * idle) * copies - own + workers * (compileCap - idle);
-  processMemoryLimit_ = options.memoryBudgetBytes ? options.memoryBudgetBytes - std::min(others, options.memoryBudgetBytes) : 0;
+  processMemoryLimit_ =
+      options.memoryBudgetBytes ? options.memoryBudgetBytes - std::min(others, options.memoryBudgetBytes) : 0;
 }
 
 LocalRenderer::~LocalRenderer() {
@@ -136,9 +139,12 @@ LocalRenderer::~LocalRenderer() {
 
 Result<void> LocalRenderer::createGbufferPipeline() {
   VkDevice d = ctx_->device();
-  auto vs = programs_->spirv(ShaderStage::Vertex, programs_->sources().assembleFixed({}, {"kernels/gbuffer.vert.glsl"}), nullptr);
+  auto vs = programs_->spirv(ShaderStage::Vertex, programs_->sources().assembleFixed({}, {"kernels/gbuffer.vert.glsl"}),
+                             nullptr);
   if (!vs) return vs.takeError();
-  auto fs = programs_->spirv(ShaderStage::Fragment, programs_->sources().assembleFixed({}, {"lib/gbuffer_encoding.glsl", "kernels/gbuffer.frag.glsl"}), nullptr);
+  auto fs = programs_->spirv(
+      ShaderStage::Fragment,
+      programs_->sources().assembleFixed({}, {"lib/gbuffer_encoding.glsl", "kernels/gbuffer.frag.glsl"}), nullptr);
   if (!fs) return fs.takeError();
   VkShaderModule modules[2] = {};
   const std::vector<uint32_t>* code[2] = {&(*vs)->words, &(*fs)->words};
@@ -160,11 +166,10 @@ Result<void> LocalRenderer::createGbufferPipeline() {
     stages[i].pName = "main";
   }
   VkVertexInputBindingDescription binding{0, sizeof(Vertex), VK_VERTEX_INPUT_RATE_VERTEX};
-  VkVertexInputAttributeDescription attrs[4] = {
-      {0, 0, VK_FORMAT_R32G32B32_SFLOAT, offsetof(Vertex, position)},
-      {1, 0, VK_FORMAT_R32G32B32_SFLOAT, offsetof(Vertex, normal)},
-      {2, 0, VK_FORMAT_R32G32_SFLOAT, offsetof(Vertex, texCoord)},
-      {3, 0, VK_FORMAT_R32G32B32A32_SFLOAT, offsetof(Vertex, tangent)}};
+  VkVertexInputAttributeDescription attrs[4] = {{0, 0, VK_FORMAT_R32G32B32_SFLOAT, offsetof(Vertex, position)},
+                                                {1, 0, VK_FORMAT_R32G32B32_SFLOAT, offsetof(Vertex, normal)},
+                                                {2, 0, VK_FORMAT_R32G32_SFLOAT, offsetof(Vertex, texCoord)},
+                                                {3, 0, VK_FORMAT_R32G32B32A32_SFLOAT, offsetof(Vertex, tangent)}};
   VkPipelineVertexInputStateCreateInfo vi{VK_STRUCTURE_TYPE_PIPELINE_VERTEX_INPUT_STATE_CREATE_INFO};
   vi.vertexBindingDescriptionCount = 1;
   vi.pVertexBindingDescriptions = &binding;
@@ -229,15 +234,15 @@ Result<EnvironmentSamplerReport> LocalRenderer::checkEnvironmentSampler(const st
 }
 
 Result<std::vector<Vec3>> LocalRenderer::evaluateBrdf(const BrdfDefinition& brdf,
-                                                     const std::vector<ParamSetting>& settings,
-                                                     const std::vector<DirectionPair>& pairs) {
+                                                      const std::vector<ParamSetting>& settings,
+                                                      const std::vector<DirectionPair>& pairs) {
   return analysis::evaluateBrdf(checkDevice(), brdf, settings, pairs);
 }
 
 Result<std::vector<AlbedoEstimate>> LocalRenderer::estimateAlbedo(const BrdfDefinition& brdf,
-                                                                 const std::vector<ParamSetting>& settings,
-                                                                 const std::vector<Vec3>& views,
-                                                                 uint32_t samplesPerView) {
+                                                                  const std::vector<ParamSetting>& settings,
+                                                                  const std::vector<Vec3>& views,
+                                                                  uint32_t samplesPerView) {
   return analysis::estimateAlbedo(checkDevice(), brdf, settings, views, samplesPerView);
 }
 
@@ -249,7 +254,7 @@ RendererCounters LocalRenderer::counters() const {
 }
 
 Result<void> LocalRenderer::exchangeViewMemory(uint64_t oldBytes, uint64_t newBytes, const std::string& what,
-                                              std::string* dropped) {
+                                               std::string* dropped) {
   return ledger_->exchange(MemoryUse::RenderTargets, oldBytes, newBytes, what, shrinker({}), dropped);
 }
 
@@ -266,7 +271,8 @@ std::string LocalRenderer::dropUnusedCaches(uint64_t needed, HeldCacheLocks held
   if (programs) add(std::to_string(programs) + " cached program" + (programs == 1 ? "" : "s"));
   if (spirv) add(std::to_string(spirv) + " cached SPIR-V module" + (spirv == 1 ? "" : "s"));
   for (const std::string& name : assets) add("the unused asset '" + name + "'");
-  what = "dropped " + what + " (" + mebibytesText(freed) + ") to stay within the memory budget; they are rebuilt when used";
+  what = "dropped " + what + " (" + mebibytesText(freed) +
+         ") to stay within the memory budget; they are rebuilt when used";
   ledger_->noteDropped(freed, what);
   return what;
 }

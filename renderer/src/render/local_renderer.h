@@ -36,7 +36,8 @@ class LocalRenderer final : public Renderer, public std::enable_shared_from_this
   Result<EnvironmentSamplerReport> checkEnvironmentSampler(const std::string& environment) override;
   Result<std::vector<Vec3>> evaluateBrdf(const BrdfDefinition& brdf, const std::vector<ParamSetting>& settings,
                                          const std::vector<DirectionPair>& pairs) override;
-  Result<std::vector<AlbedoEstimate>> estimateAlbedo(const BrdfDefinition& brdf, const std::vector<ParamSetting>& settings,
+  Result<std::vector<AlbedoEstimate>> estimateAlbedo(const BrdfDefinition& brdf,
+                                                     const std::vector<ParamSetting>& settings,
                                                      const std::vector<Vec3>& views, uint32_t samplesPerView) override;
   Result<int> preloadFromCache(const BrdfDefinition& brdf) override { return programs_->preloadFromCache(brdf); }
   RendererCounters counters() const override;
@@ -80,7 +81,8 @@ class LocalRenderer final : public Renderer, public std::enable_shared_from_this
   VkSampler environmentSampler() const { return assets_->environmentSampler(); }
   // AssetCache::writeDefaultTextures and writeTextures.
   void writeDefaultTextures(VkDescriptorSet objectSet) const { assets_->writeDefaultTextures(objectSet); }
-  void writeTextures(VkDescriptorSet objectSet, const std::shared_ptr<const GpuTexture> (&textures)[kMaxTextures]) const {
+  void writeTextures(VkDescriptorSet objectSet,
+                     const std::shared_ptr<const GpuTexture> (&textures)[kMaxTextures]) const {
     assets_->writeTextures(objectSet, textures);
   }
   bool hostResolve() const { return hostResolve_; }
@@ -118,7 +120,7 @@ class LocalRenderer final : public Renderer, public std::enable_shared_from_this
     return [this, held](uint64_t needed) { return dropUnusedCaches(needed, held); };
   }
 
-  std::unique_ptr<VkContext> ctx_;  // declared first: destroyed last
+  std::unique_ptr<VkContext> ctx_;        // declared first: destroyed last
   std::unique_ptr<MemoryLedger> ledger_;  // outlives every reservation the caches below hold
   uint64_t processMemoryLimit_ = 0;
   std::unique_ptr<PipelineLayouts> layouts_;

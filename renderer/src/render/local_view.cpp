@@ -17,14 +17,14 @@ namespace brdfa {
 
 namespace {
 
-constexpr uint32_t kShadeGroup = 8;     // local size of shade/background kernels
+constexpr uint32_t kShadeGroup = 8;  // local size of shade/background kernels
 // The preview scratch holds at most this many 2x2 blocks: a scratch for a whole image in every
 // view costs a class of many views much memory; a larger object's preview goes in several
 // dispatches instead, which cost little more time.
 constexpr uint32_t kPreviewScratchBlocks = 16384;
 constexpr VkDeviceSize kPreviewScratchBlockBytes = 6 * 16;  // BRDFA_PREVIEW_STRIDE texels
-constexpr uint32_t kResolveGroup = 16;  // local size of the resolve kernel
-constexpr double kErrorRefreshMs = 200; // rel_error is refreshed at least this often while rendering
+constexpr uint32_t kResolveGroup = 16;                      // local size of the resolve kernel
+constexpr double kErrorRefreshMs = 200;  // rel_error is refreshed at least this often while rendering
 // The passes right after the first one of a restart are what the next change of a user moving a
 // slider or the camera meets: each is split into at least SubmissionSizer::kInteractiveSplits
 // submissions, so that interruptPass() takes effect within a fraction of it. By the pass's cost
@@ -65,8 +65,8 @@ bool sameGeometry(const Scene& a, const Scene& b) {
 
 bool sameLighting(const Scene& a, const Scene& b) {
   const EnvironmentSettings &ea = a.environment, &eb = b.environment;
-  return ea.name == eb.name && ea.intensity == eb.intensity && ea.rotation == eb.rotation &&
-         ea.visible == eb.visible && a.render.sampling == b.render.sampling && a.render.seed == b.render.seed;
+  return ea.name == eb.name && ea.intensity == eb.intensity && ea.rotation == eb.rotation && ea.visible == eb.visible &&
+         a.render.sampling == b.render.sampling && a.render.seed == b.render.seed;
 }
 
 }  // namespace
@@ -125,8 +125,8 @@ Result<void> LocalView::resize(uint32_t width, uint32_t height) {
   const VkDeviceSize pixels = VkDeviceSize(width) * height;
   const uint32_t jitter = pixels <= VkDeviceSize(1024) * 1024 ? kMaxJitter : 1;
   // Slices and planes start where both a storage-buffer range and a texel view may start.
-  const VkDeviceSize align = std::max<VkDeviceSize>({ctx.limits().minStorageBufferOffsetAlignment,
-                                                     ctx.limits().minTexelBufferOffsetAlignment, 16});
+  const VkDeviceSize align = std::max<VkDeviceSize>(
+      {ctx.limits().minStorageBufferOffsetAlignment, ctx.limits().minTexelBufferOffsetAlignment, 16});
   auto aligned = [&](VkDeviceSize n) { return (n + align - 1) / align * align; };
   // Texel views address at most maxTexelBufferElements texels (2^27 on lavapipe, more on GPUs).
   // The largest views now hold one texel per pixel (a G-buffer plane, the edge list); the bound
@@ -147,9 +147,9 @@ Result<void> LocalView::resize(uint32_t width, uint32_t height) {
           : std::min<uint32_t>(std::max(kPreviewScratchBlocks, rowBlocks), groups(height, kShadeGroup) * rowBlocks);
   const VkDeviceSize stride = aligned(detailOffset + pixels * kGbufferDetailBytes);
   const uint64_t bytes = pixels * (kGbufferSurfaceBytes + kGbufferDetailBytes + 4)  // raster targets and depth
-                         + stride * jitter + pixels * 32      // G-buffer copies, accumulators
-                         + pixels * (4 + 16) + partialCount(width, height) * 16  // outputs
-                         + pixels * 4                         // edge list
+                         + stride * jitter + pixels * 32                            // G-buffer copies, accumulators
+                         + pixels * (4 + 16) + partialCount(width, height) * 16     // outputs
+                         + pixels * 4                                               // edge list
                          + scratchBlocks * kPreviewScratchBlockBytes;
   // The old size's share is given back in the same step: a refused size leaves the view as it
   // was, still rendering its old size.
@@ -183,7 +183,8 @@ Result<void> LocalView::createTargets(uint32_t width, uint32_t height) {
   g.width = width;
   g.height = height;
   g.usage = VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | VK_IMAGE_USAGE_TRANSFER_SRC_BIT;
-  for (auto [img, format] : {std::pair{&gSurface_, kGbufferSurfaceFormat}, std::pair{&gDetail_, kGbufferDetailFormat}}) {
+  for (auto [img, format] :
+       {std::pair{&gSurface_, kGbufferSurfaceFormat}, std::pair{&gDetail_, kGbufferDetailFormat}}) {
     g.format = format;
     auto created = Image::create(ctx, g);
     if (!created) return created.takeError();
@@ -219,29 +220,32 @@ Result<void> LocalView::createBuffers(uint32_t width, uint32_t height, uint32_t 
   // above 1024^2 pixels the memory is not worth it and the image is not anti-aliased (its
   // pixels are small anyway).
   slicesReady_ = 0;
-  struct Want { Buffer* buffer; VkDeviceSize size; VkBufferUsageFlags usage; bool host; };
+  struct Want {
+    Buffer* buffer;
+    VkDeviceSize size;
+    VkBufferUsageFlags usage;
+    bool host;
+  };
   // With the host resolve, the host reads the G-buffer and accumulators in place; on a CPU
   // device the host also lists the edge pixels from the G-buffer (listEdgePixels), whichever
   // resolve runs, so both resolves see the same image.
   const bool host = r_->hostResolve() || r_->ctx().info().type == "cpu";
-  const Want wants[7] = {
-      {&gbuffer_, sliceStride_ * jitterCount_,
-       storage | VK_BUFFER_USAGE_UNIFORM_TEXEL_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT, host},
-      {&accum_, pixels * 2 * 16,
-       storage | VK_BUFFER_USAGE_TRANSFER_DST_BIT, host},
-      {&outRgba8_, pixels * 4, storage, true},
-      {&outFloat_, pixels * 16, storage, true},
-      {&partials_, VkDeviceSize(partialCount(width, height)) * 16, storage, true},
-      {&edgeList_, pixels * 4, VK_BUFFER_USAGE_UNIFORM_TEXEL_BUFFER_BIT, true},
-      {&previewScratch_, scratchBlocks * kPreviewScratchBlockBytes, storage, false}};
+  const Want wants[7] = {{&gbuffer_, sliceStride_ * jitterCount_,
+                          storage | VK_BUFFER_USAGE_UNIFORM_TEXEL_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT, host},
+                         {&accum_, pixels * 2 * 16, storage | VK_BUFFER_USAGE_TRANSFER_DST_BIT, host},
+                         {&outRgba8_, pixels * 4, storage, true},
+                         {&outFloat_, pixels * 16, storage, true},
+                         {&partials_, VkDeviceSize(partialCount(width, height)) * 16, storage, true},
+                         {&edgeList_, pixels * 4, VK_BUFFER_USAGE_UNIFORM_TEXEL_BUFFER_BIT, true},
+                         {&previewScratch_, scratchBlocks * kPreviewScratchBlockBytes, storage, false}};
   for (const Want& w : wants) {
     auto b = Buffer::create(ctx, w.size, w.usage, w.host);
     if (!b) return b.takeError();
     *w.buffer = std::move(b.value());
   }
   for (uint32_t slice = 0; slice < jitterCount_; ++slice) {
-    auto surface = TexelView::create(ctx, gbuffer_, kGbufferSurfaceFormat, sliceStride_ * slice,
-                                     pixels * kGbufferSurfaceBytes);
+    auto surface =
+        TexelView::create(ctx, gbuffer_, kGbufferSurfaceFormat, sliceStride_ * slice, pixels * kGbufferSurfaceBytes);
     if (!surface) return surface.takeError();
     surfaceViews_[slice] = std::move(surface.value());
     auto detail = TexelView::create(ctx, gbuffer_, kGbufferDetailFormat, sliceStride_ * slice + detailOffset_,
@@ -259,8 +263,8 @@ Result<void> LocalView::createBuffers(uint32_t width, uint32_t height, uint32_t 
 void LocalView::writeViewDescriptors() {
   VkDescriptorImageInfo env{r_->environmentSampler(), env_->cube.view(), VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL};
   const VkBufferView table = env_->table.view();
-  const std::pair<uint32_t, const Buffer*> buffers[7] = {{0, &gbuffer_},  {3, &accum_},    {4, &counters_},
-                                                         {6, &outRgba8_}, {7, &outFloat_}, {8, &partials_},
+  const std::pair<uint32_t, const Buffer*> buffers[7] = {{0, &gbuffer_},        {3, &accum_},    {4, &counters_},
+                                                         {6, &outRgba8_},       {7, &outFloat_}, {8, &partials_},
                                                          {12, &previewScratch_}};
   const VkDeviceSize sliceBytes = detailOffset_ + VkDeviceSize(width_) * height_ * kGbufferDetailBytes;
   // Every set is written (unused slices alias slice 0) so that no set is ever left invalid.
@@ -453,14 +457,15 @@ Result<void> LocalView::setScene(const Scene& scene) {
 // How `scene`, with `objects` built for it, differs from the scene the view holds (any scene
 // differs in everything from none). `resized`: the new scene's size differs.
 LocalView::SceneChange LocalView::compareScene(const Scene& scene, const std::vector<ObjectState>& objects,
-                                                         bool resized) const {
+                                               bool resized) const {
   SceneChange c;
   c.sameShading = hasScene_ && !resized && sameLighting(scene_, scene) && objects.size() == objects_.size();
   for (size_t i = 0; c.sameShading && i < objects.size(); ++i) {
-    c.sameShading = objects[i].kernel->programHash == objects_[i].kernel->programHash &&
-                    objects[i].params.size() == objects_[i].params.size() &&
-                    std::memcmp(objects[i].params.mapped(), objects_[i].params.mapped(), objects[i].params.size()) == 0 &&
-                    scene.objects[i].textures == scene_.objects[i].textures;
+    c.sameShading =
+        objects[i].kernel->programHash == objects_[i].kernel->programHash &&
+        objects[i].params.size() == objects_[i].params.size() &&
+        std::memcmp(objects[i].params.mapped(), objects_[i].params.mapped(), objects[i].params.size()) == 0 &&
+        scene.objects[i].textures == scene_.objects[i].textures;
   }
   // The same pipelines (parameters, textures or lighting changed): no driver compile comes with
   // the next dispatch.
@@ -470,11 +475,10 @@ LocalView::SceneChange LocalView::compareScene(const Scene& scene, const std::ve
   c.geometryChanged = resized || !hasScene_ || !sameGeometry(scene_, scene);
   c.lightingChanged = !hasScene_ || !sameLighting(scene_, scene);
   c.restart = c.geometryChanged || !c.sameShading;
-  c.displayChanged = !hasScene_ || scene.render.exposure != scene_.render.exposure ||
-                     scene.render.toneMap != scene_.render.toneMap ||
-                     scene.render.samplesPerFrame != scene_.render.samplesPerFrame ||
-                     scene.render.maxSamples != scene_.render.maxSamples ||
-                     scene.render.targetError != scene_.render.targetError;
+  c.displayChanged =
+      !hasScene_ || scene.render.exposure != scene_.render.exposure || scene.render.toneMap != scene_.render.toneMap ||
+      scene.render.samplesPerFrame != scene_.render.samplesPerFrame ||
+      scene.render.maxSamples != scene_.render.maxSamples || scene.render.targetError != scene_.render.targetError;
   return c;
 }
 
@@ -572,7 +576,12 @@ void LocalView::updateDone() {
 ComputePush LocalView::basePush() const {
   ComputePush p{};
   CameraFrame cam = cameraFrame(scene_.camera, width_, height_);
-  auto put = [](float* dst, const glm::vec3& v) { dst[0] = v.x; dst[1] = v.y; dst[2] = v.z; dst[3] = 0; };
+  auto put = [](float* dst, const glm::vec3& v) {
+    dst[0] = v.x;
+    dst[1] = v.y;
+    dst[2] = v.z;
+    dst[3] = 0;
+  };
   put(p.cameraPos, cam.position);
   put(p.cameraRight, cam.right * (cam.tanHalfFov * cam.aspect));
   put(p.cameraUp, cam.up * cam.tanHalfFov);
@@ -639,7 +648,7 @@ void LocalView::recordRaster(VkCommandBuffer cb, uint32_t slice) {
 }
 
 void LocalView::recordBackground(VkCommandBuffer cb, const PixelRect& rect, uint32_t slice, uint32_t count,
-                                      bool firstPass, bool blocks) {
+                                 bool firstPass, bool blocks) {
   if (rect.width == 0 || rect.height == 0) return;
   ComputePush push = basePush();
   const bool visible = scene_.environment.visible;
@@ -650,7 +659,7 @@ void LocalView::recordBackground(VkCommandBuffer cb, const PixelRect& rect, uint
   push.tone[2] = jitter.x;
   push.tone[3] = jitter.y;
   push.frame[2] = static_cast<uint32_t>(stats_.spp);  // index of the pass's first sample
-  push.frame[3] = count;  // 0: the once-per-restart write
+  push.frame[3] = count;                              // 0: the once-per-restart write
   push.target[2] = rect.x | (rect.y << 16);
   push.target[3] = (firstPass ? 1u : 0u) | (blocks ? 2u : 0u);
   // The per-pass use goes over the edge list once it is known (see the kernel).
@@ -664,7 +673,8 @@ void LocalView::recordBackground(VkCommandBuffer cb, const PixelRect& rect, uint
   if (list)
     vkCmdDispatch(cb, groups(edgeCount_, kShadeGroup * kShadeGroup), 1, 1);
   else
-    vkCmdDispatch(cb, groups(groups(rect.width, scale), kShadeGroup), groups(groups(rect.height, scale), kShadeGroup), 1);
+    vkCmdDispatch(cb, groups(groups(rect.width, scale), kShadeGroup), groups(groups(rect.height, scale), kShadeGroup),
+                  1);
 }
 
 void LocalView::recordPending(VkCommandBuffer cb, uint32_t slice, bool resuming, bool preview) {
@@ -857,8 +867,8 @@ LocalView::PassPlan LocalView::planPass(bool interruptible, double frameTargetMs
   p.firstSample = firstSamplePending_ && !resumed;
   p.scale = p.preview ? 2 : 1;
   p.count = p.preview || p.firstSample ? 1
-            : resumed ? resumed->count
-                      : static_cast<uint32_t>(std::min<uint64_t>(
+            : resumed                  ? resumed->count
+                                       : static_cast<uint32_t>(std::min<uint64_t>(
                             {static_cast<uint64_t>(scene_.render.samplesPerFrame), ramp, maxSamples - stats_.spp}));
   if (frameTargetMs > 0 && !p.preview && !p.firstSample && !resumed) p.count = sizer_.fit(frameTargetMs, p.count);
   p.slice = resumed ? resumed->slice : sliceForPass(stats_.passes);
@@ -943,8 +953,8 @@ Result<bool> LocalView::runSweep(const PassPlan& plan, Sweep& s) {
     } else  // the accumulators are read-modify-written; earlier submissions' writes come first
       memoryBarrier(s.cb, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_ACCESS_SHADER_WRITE_BIT,
                     VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_ACCESS_SHADER_READ_BIT | VK_ACCESS_SHADER_WRITE_BIT);
-    vkCmdBindDescriptorSets(s.cb, VK_PIPELINE_BIND_POINT_COMPUTE, r_->computeLayout(), 0, 1, &viewSets_[plan.slice],
-                            0, nullptr);
+    vkCmdBindDescriptorSets(s.cb, VK_PIPELINE_BIND_POINT_COMPUTE, r_->computeLayout(), 0, 1, &viewSets_[plan.slice], 0,
+                            nullptr);
     SubmissionSizer::Request request;
     request.targetMs = plan.targetMs;
     request.passUnits = plan.passUnits;
@@ -1012,17 +1022,15 @@ Result<double> LocalView::recordShading(const PassPlan& plan, Sweep& s, double b
 // The next run of tiles of the current object from where the sweep stands, within what is
 // left of `budget` after `units`: whole rows of workgroups while they fit, else part of one
 // row (at least one workgroup per submission). No columns: the submission is full.
-LocalView::Tiles LocalView::chooseTiles(const PassPlan& plan, const Sweep& s, double units,
-                                                  double budget) const {
+LocalView::Tiles LocalView::chooseTiles(const PassPlan& plan, const Sweep& s, double units, double budget) const {
   const size_t i = plan.visible[s.obj];
   const ObjectState& o = objects_[i];
   const uint32_t gx = gridX(o, plan.scale), gy = gridY(o, plan.scale);
   const uint32_t n = std::min(plan.chunk, plan.count - s.done);
   // A preview-kernel dispatch hands over through the scratch, one block per invocation
   // (a whole row of the image's blocks always fits: see resize).
-  const uint32_t maxRows = plan.byPreviewKernel[i]
-                               ? std::max(1u, previewScratchBlocks_ / (gx * kShadeGroup * kShadeGroup))
-                               : UINT32_MAX;
+  const uint32_t maxRows =
+      plan.byPreviewKernel[i] ? std::max(1u, previewScratchBlocks_ / (gx * kShadeGroup * kShadeGroup)) : UINT32_MAX;
   Tiles t;
   if (s.col == 0) {
     for (uint32_t r = s.row; r < gy && t.rows < maxRows; ++r, ++t.rows) {
@@ -1146,9 +1154,16 @@ bool LocalView::leavePartway(const PassPlan& plan, const Sweep& s, double submis
   if (!interrupted && !frameSpent) return false;
   // Keep the place; spp counts the pass once complete.
   const double segmentMs = msSince(plan.t0);
-  partial_ = PartialPass{plan.count, plan.slice, plan.chunk,  s.done,
-                         s.row,      s.col,      s.obj,       s.passDone,
-                         (plan.resumed ? plan.resumed->ms : 0.0) + segmentMs, plan.refreshError};
+  partial_ = PartialPass{plan.count,
+                         plan.slice,
+                         plan.chunk,
+                         s.done,
+                         s.row,
+                         s.col,
+                         s.obj,
+                         s.passDone,
+                         (plan.resumed ? plan.resumed->ms : 0.0) + segmentMs,
+                         plan.refreshError};
   stats_.elapsedMs += segmentMs;
   sinceErrorMs_ += segmentMs;
   stats_.passInProgress = !interrupted;  // interrupted: a scene change waits, nothing to show
@@ -1160,7 +1175,7 @@ bool LocalView::leavePartway(const PassPlan& plan, const Sweep& s, double submis
 // its samples, its time (to the pass sizer after the interactive passes) and, when due, a new
 // error estimate. After a pass by the preview kernel the submission costs are learned again.
 FrameStats LocalView::finishPass(const PassPlan& plan, Sweep& s) {
-  submissionSizer_.passEnded();  // one pass to settle on the new cost
+  submissionSizer_.passEnded();               // one pass to settle on the new cost
   const double segmentMs = msSince(plan.t0);  // this call's part of the pass
   const double passMs = segmentMs + (plan.resumed ? plan.resumed->ms : 0.0);
   PassBreakdown& breakdown = s.breakdown;

@@ -44,8 +44,8 @@ class LocalView final : public RenderView {
     ShadeVariant variant;  // what the kernel runs, for the stats' estimator and warnings
     std::shared_ptr<const GpuMesh> mesh;
     std::shared_ptr<const GpuTexture> textures[kMaxTextures];  // null: white
-    Buffer params;     // std140 BrdfParams
-    Buffer transform;  // ObjectUniform
+    Buffer params;                                             // std140 BrdfParams
+    Buffer transform;                                          // ObjectUniform
     VkDescriptorSet set = VK_NULL_HANDLE;
     PixelRect pixels;  // where the shading dispatch runs (the object's screen bounds)
     // Covered pixels of each 8x8 workgroup of `pixels`, row-major (empty: not measured, count
@@ -59,9 +59,9 @@ class LocalView final : public RenderView {
   struct PartialPass {
     uint32_t count = 0, slice = 0, chunk = 0;  // the pass's samples, G-buffer slice, samples per sweep
     uint32_t done = 0, row = 0, col = 0;       // samples swept, workgroup row and column in the object
-    size_t obj = 0;                             // index into the visible objects
-    double passDone = 0;                        // cost units shaded so far
-    double ms = 0;                              // wall time spent on it so far
+    size_t obj = 0;                            // index into the visible objects
+    double passDone = 0;                       // cost units shaded so far
+    double ms = 0;                             // wall time spent on it so far
     bool refreshError = false;
   };
   // What one pass does, decided before its first submission (planPass).
@@ -71,24 +71,24 @@ class LocalView final : public RenderView {
     std::chrono::steady_clock::time_point t0;  // when this call's part of the pass began
     std::optional<PartialPass> resumed;        // the interrupted pass this one completes
     bool preview = false, firstSample = false, firstPass = false;
-    bool refreshError = false;  // the error estimate is refreshed at the pass's end
-    bool sliced = false;        // a watched pass: may return partway at its frame target
-    uint32_t scale = 1;         // pixels per dispatched invocation, per axis (2: a preview)
+    bool refreshError = false;                 // the error estimate is refreshed at the pass's end
+    bool sliced = false;                       // a watched pass: may return partway at its frame target
+    uint32_t scale = 1;                        // pixels per dispatched invocation, per axis (2: a preview)
     uint32_t count = 0, slice = 0, chunk = 0;  // samples, G-buffer slice, samples per sweep
-    std::vector<bool> byPreviewKernel;  // per object: shaded by its preview kernel
-    bool previewKernelPass = false;     // some object is
-    std::vector<size_t> visible;        // objects on screen
-    double passUnits = 0;               // the whole pass's cost units
-    double targetMs = 0;                // device time a submission aims at (0: no split)
+    std::vector<bool> byPreviewKernel;         // per object: shaded by its preview kernel
+    bool previewKernelPass = false;            // some object is
+    std::vector<size_t> visible;               // objects on screen
+    double passUnits = 0;                      // the whole pass's cost units
+    double targetMs = 0;                       // device time a submission aims at (0: no split)
   };
   // Where a pass's sweep stands and what its submissions measured (runSweep).
   struct Sweep {
     uint32_t done = 0, row = 0, col = 0;  // samples swept, workgroup row and column in the object
-    size_t obj = 0;                        // index into the visible objects
-    double passDone = 0;                   // cost units shaded so far
-    ComputePush push{};                    // the shade kernels' push constants
-    VkCommandBuffer cb = VK_NULL_HANDLE;   // the submission being recorded
-    bool profile = false;                  // RendererOptions::profilePasses
+    size_t obj = 0;                       // index into the visible objects
+    double passDone = 0;                  // cost units shaded so far
+    ComputePush push{};                   // the shade kernels' push constants
+    VkCommandBuffer cb = VK_NULL_HANDLE;  // the submission being recorded
+    bool profile = false;                 // RendererOptions::profilePasses
     PassBreakdown breakdown;
     uint64_t submissions = 0;
     double maxSubmissionMs = 0;
@@ -141,8 +141,8 @@ class LocalView final : public RenderView {
   Result<void> createBuffers(uint32_t width, uint32_t height, uint32_t scratchBlocks);
   void writeViewDescriptors();
   // `prebuilt`: prebuildKernels(scene), used where it holds an object's kernels.
-  Result<std::vector<ObjectState>> buildObjects(const Scene& scene,
-                                                const std::vector<std::optional<LocalRenderer::ShadeKernels>>& prebuilt);
+  Result<std::vector<ObjectState>> buildObjects(
+      const Scene& scene, const std::vector<std::optional<LocalRenderer::ShadeKernels>>& prebuilt);
   // The kernels of `scene`'s objects, in object order, built or found in the renderer's cache
   // without the view's lock; nullopt where that failed (buildObjects asks again and reports it).
   std::vector<std::optional<LocalRenderer::ShadeKernels>> prebuildKernels(const Scene& scene);
@@ -191,7 +191,7 @@ class LocalView final : public RenderView {
   uint32_t slicesReady_ = 0;       // bit s: slice s holds the current geometry
   uint32_t sliceForPass(uint64_t pass) const;
   VkDescriptorSet viewSets_[kMaxJitter] = {};
-  PixelRect coverRect_;            // union of the objects' screen bounds
+  PixelRect coverRect_;  // union of the objects' screen bounds
   VkFramebuffer framebuffer_ = VK_NULL_HANDLE;
   Image gSurface_, gDetail_, depth_;
   Buffer gbuffer_, accum_, counters_, outRgba8_, outFloat_, partials_;
@@ -220,10 +220,10 @@ class LocalView final : public RenderView {
   // from what this view's own submissions cost.
   SubmissionSizer submissionSizer_;
   bool coverageKnown_ = false;  // ObjectState::cover is measured for the current geometry
-  double sinceErrorMs_ = 0;  // pass time since rel_error was last refreshed
-  PassSizer sizer_;  // what passes of each size took since the last restart (renderPass's frame target)
+  double sinceErrorMs_ = 0;     // pass time since rel_error was last refreshed
+  PassSizer sizer_;             // what passes of each size took since the last restart (renderPass's frame target)
   FrameStats stats_;
-  bool previewPending_ = false;  // the next pass is a preview (RenderSettings::previewPass)
+  bool previewPending_ = false;      // the next pass is a preview (RenderSettings::previewPass)
   bool firstSamplePending_ = false;  // the next pass is a first sample (RenderSettings::firstSampleKernel)
   std::optional<PartialPass> partial_;
   std::atomic<bool> interruptRequested_{false};

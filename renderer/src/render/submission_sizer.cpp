@@ -24,7 +24,7 @@ uint32_t SubmissionSizer::samplesPerSweep(double targetMs, uint32_t count, doubl
 SubmissionSizer::Budget SubmissionSizer::budget(const Request& r) const {
   Budget b;
   b.targetMs = r.targetMs;
-  b.sized = std::min({r.targetMs <= 0     ? INFINITY
+  b.sized = std::min({r.targetMs <= 0   ? INFINITY
                       : msPerUnit_ <= 0 ? kProbeUnits
                                         : std::min(r.targetMs / msPerUnit_, kGrowth * maxUnits_),
                       r.interactive && r.targetMs > 0 ? r.passUnits / kInteractiveSplits : INFINITY,
@@ -49,8 +49,8 @@ void SubmissionSizer::record(double units, double ms, const Budget& b) {
     warmUp_ = false;
   } else if (units > 0 && std::isfinite(ms) && ms >= 0 &&
              (msPerUnit_ <= 0 || units >= 0.5 * b.sized || ms > b.targetMs)) {
-    const double floor = priorMsPerUnit_ > 0 ? std::min(kCostDecay * msPerUnit_, priorMsPerUnit_)
-                                             : kCostDecay * msPerUnit_;
+    const double floor =
+        priorMsPerUnit_ > 0 ? std::min(kCostDecay * msPerUnit_, priorMsPerUnit_) : kCostDecay * msPerUnit_;
     msPerUnit_ = std::max(ms / units, floor);
   }
   maxUnits_ = std::max(maxUnits_, units);

@@ -28,11 +28,11 @@ class SubmissionSizer {
 
   // What the next submission may take, from the pass as it stands.
   struct Request {
-    double targetMs = 0;    // device time a submission aims at (0 or less: no target, no split)
-    double passUnits = 0;   // the whole pass's cost units
-    double passDone = 0;    // units shaded so far in this pass
+    double targetMs = 0;       // device time a submission aims at (0 or less: no target, no split)
+    double passUnits = 0;      // the whole pass's cost units
+    double passDone = 0;       // units shaded so far in this pass
     bool interactive = false;  // split in kInteractiveSplits or more (with a target only)
-    double frameMs = 0;     // a watched pass's frame time: two or more submissions per frame (0: none)
+    double frameMs = 0;        // a watched pass's frame time: two or more submissions per frame (0: none)
   };
   struct Budget {
     double sized = 0;     // the units the sizing allows (INFINITY: no limit)

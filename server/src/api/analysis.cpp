@@ -96,7 +96,8 @@ Result<PlotRequest> readRequest(PlotKind kind, const json& body) {
     bool known = false;
     for (const char* k : kKeys) known = known || kv.key() == k;
     if (!known)
-      return bad(kv.key(), "unknown key (known: series, theta_i, quantity, resolution, phi_d, theta_v, samples, format)");
+      return bad(kv.key(),
+                 "unknown key (known: series, theta_i, quantity, resolution, phi_d, theta_v, samples, format)");
   }
   PlotRequest r;
   r.kind = kind;
@@ -184,8 +185,12 @@ json toJson(const PlotRequest& request, const std::vector<Series>& series, const
     const Plot& plot = plots[i];
     json params = json::object();
     for (const BrdfParam& p : s.brdf->params) params[p.name] = paramValueToJson(p.type, s.params.at(p.name));
-    json item{{"label", s.label}, {"brdf", s.brdfName}, {"params", params}, {"notes", s.notes},
-              {"values", seriesValues(plot, plot.values.front())}, {"ms", plot.ms}};
+    json item{{"label", s.label},
+              {"brdf", s.brdfName},
+              {"params", params},
+              {"notes", s.notes},
+              {"values", seriesValues(plot, plot.values.front())},
+              {"ms", plot.ms}};
     if (request.kind == PlotKind::Albedo) {
       item["std_error"] = seriesValues(plot, plot.stdError.front());
       item["estimator"] = plot.estimator;

@@ -147,8 +147,7 @@ void uploadAsset(Service& service, const httplib::Request& req, httplib::Respons
     return sendQuotaExceeded(res, uploadQuotaName(hit.quota), hit.limit, hit.used,
                              added.error().message + " (--quota-" +
                                  (hit.quota == UploadQuota::Uploads ? "uploads " : "upload-bytes ") +
-                                 std::to_string(hit.limit) +
-                                 "); delete one of yours (DELETE /api/assets/{id})");
+                                 std::to_string(hit.limit) + "); delete one of yours (DELETE /api/assets/{id})");
   if (!added) return sendRejection(res, added.error(), rejection);
   res.set_header("Location", "/api/assets/" + added->id);
   sendJson(res, assetToJson(added.value()), 201);

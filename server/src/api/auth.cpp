@@ -14,8 +14,8 @@ constexpr size_t kMaxUsers = 1000;  // a leaked join code cannot fill the disk w
 nlohmann::json quotasJson(const Service& service, const Identity& who) {
   if (who.teacher()) return nullptr;
   const Quotas& q = service.config.quotas;
-  return {{"sessions", q.sessions}, {"brdfs", q.brdfs},   {"uploads", q.uploads},
-          {"upload_bytes", q.uploadBytes}, {"jobs", q.jobs}, {"renders", q.renders}};
+  return {{"sessions", q.sessions},        {"brdfs", q.brdfs}, {"uploads", q.uploads},
+          {"upload_bytes", q.uploadBytes}, {"jobs", q.jobs},   {"renders", q.renders}};
 }
 
 // The user store of tokens mode; in the other modes answers 400 unsupported and returns null.
@@ -53,10 +53,9 @@ void registerSelfRoutes(httplib::Server& server, Service& service) {
     if (!body) return;
     if (!body->is_object() || !body->contains("code") || !(*body)["code"].is_string())
       return sendError(res, ErrorCode::InvalidArgument, "send {\"code\": \"...\", \"display_name\": \"...\"}", "code");
-    const std::string displayName =
-        (*body).contains("display_name") && (*body)["display_name"].is_string()
-            ? cleanDisplayName((*body)["display_name"].get<std::string>())
-            : std::string();
+    const std::string displayName = (*body).contains("display_name") && (*body)["display_name"].is_string()
+                                        ? cleanDisplayName((*body)["display_name"].get<std::string>())
+                                        : std::string();
     if (displayName.empty())
       return sendError(res, ErrorCode::InvalidArgument, "display_name: pick a name to show (1-64 characters)",
                        "display_name");
@@ -69,8 +68,13 @@ void registerSelfRoutes(httplib::Server& server, Service& service) {
     if (!user) return sendStoreError(res, user.error());
     Result<IssuedToken> token = users->issueToken(user->user);
     if (!token) return sendStoreError(res, token.error());
-    sendJson(res, {{"token", token->token}, {"token_id", token->id}, {"user", user->user},
-                   {"display_name", user->displayName}, {"role", "student"}}, 201);
+    sendJson(res,
+             {{"token", token->token},
+              {"token_id", token->id},
+              {"user", user->user},
+              {"display_name", user->displayName},
+              {"role", "student"}},
+             201);
   });
 
   server.Post("/api/auth/logout", [&service](const httplib::Request& req, httplib::Response& res) {
@@ -105,8 +109,13 @@ void registerJoinCodeRoutes(httplib::Server& server, Service& service) {
     auto issued = users->issueJoinCode(minutes);
     if (!issued) return sendStoreError(res, issued.error());
     const auto& [code, info] = issued.value();
-    sendJson(res, {{"code", code}, {"id", info.id}, {"created_at", info.createdAt}, {"expires_at", info.expiresAt},
-                   {"join_path", "/?join=" + code}}, 201);
+    sendJson(res,
+             {{"code", code},
+              {"id", info.id},
+              {"created_at", info.createdAt},
+              {"expires_at", info.expiresAt},
+              {"join_path", "/?join=" + code}},
+             201);
   });
 
   server.Get("/api/auth/join-codes", [&service](const httplib::Request& req, httplib::Response& res) {
@@ -138,8 +147,11 @@ void registerUserRoutes(httplib::Server& server, Service& service) {
       nlohmann::json theirs = nlohmann::json::array();
       for (const TokenInfo& t : tokens)
         if (t.user == u.user) theirs.push_back({{"id", t.id}, {"created_at", t.createdAt}});
-      out.push_back({{"user", u.user}, {"display_name", u.displayName}, {"role", roleName(u.role)},
-                     {"created_at", u.createdAt}, {"tokens", theirs}});
+      out.push_back({{"user", u.user},
+                     {"display_name", u.displayName},
+                     {"role", roleName(u.role)},
+                     {"created_at", u.createdAt},
+                     {"tokens", theirs}});
     }
     sendJson(res, out);
   });
@@ -179,8 +191,13 @@ void registerUserRoutes(httplib::Server& server, Service& service) {
     if (!made) return sendStoreError(res, made.error());
     Result<IssuedToken> token = users->issueToken(user);
     if (!token) return sendStoreError(res, token.error());
-    sendJson(res, {{"user", made->user}, {"display_name", made->displayName}, {"role", roleName(made->role)},
-                   {"token", token->token}, {"token_id", token->id}}, 201);
+    sendJson(res,
+             {{"user", made->user},
+              {"display_name", made->displayName},
+              {"role", roleName(made->role)},
+              {"token", token->token},
+              {"token_id", token->id}},
+             201);
   });
 
   server.Post("/api/auth/users/([^/]+)/tokens", [&service](const httplib::Request& req, httplib::Response& res) {
@@ -193,15 +210,16 @@ void registerUserRoutes(httplib::Server& server, Service& service) {
     sendJson(res, {{"token", token->token}, {"token_id", token->id}}, 201);
   });
 
-  server.Delete("/api/auth/users/([^/]+)/tokens/([^/]+)", [&service](const httplib::Request& req,
-                                                                    httplib::Response& res) {
-    UserStore* users = teachersTokenStore(service, req, res);
-    if (!users) return;
-    Result<bool> revoked = users->revokeToken(std::string(req.matches[1]), std::string(req.matches[2]));
-    if (!revoked) return sendStoreError(res, revoked.error());
-    if (!revoked.value()) return sendError(res, ErrorCode::NotFound, "that user has no token with that id", "id");
-    res.status = 204;
-  });
+  server.Delete("/api/auth/users/([^/]+)/tokens/([^/]+)",
+                [&service](const httplib::Request& req, httplib::Response& res) {
+                  UserStore* users = teachersTokenStore(service, req, res);
+                  if (!users) return;
+                  Result<bool> revoked = users->revokeToken(std::string(req.matches[1]), std::string(req.matches[2]));
+                  if (!revoked) return sendStoreError(res, revoked.error());
+                  if (!revoked.value())
+                    return sendError(res, ErrorCode::NotFound, "that user has no token with that id", "id");
+                  res.status = 204;
+                });
 
   server.Delete("/api/auth/users/([^/]+)", [&service](const httplib::Request& req, httplib::Response& res) {
     UserStore* users = teachersTokenStore(service, req, res);

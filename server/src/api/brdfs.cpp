@@ -36,7 +36,7 @@ nlohmann::json brokenToJson(const BrokenBrdf& b, bool withSource) {
   nlohmann::json error{{"error", errorCodeName(b.error.code)}, {"message", b.error.message}};
   if (!b.error.diagnostics.empty()) error["diagnostics"] = diagnosticsToJson(b.error.diagnostics);
   nlohmann::json out{{"name", b.name}, {"format", nullptr}, {"builtin", false}, {"params", nlohmann::json::array()},
-                     {"broken", true},   {"error", error}};
+                     {"broken", true}, {"error", error}};
   if (withSource) out["source"] = b.source;
   return out;
 }

@@ -23,7 +23,8 @@ void sendJobRefusal(httplib::Response& res, const JobSubmitted& submitted, const
     return sendQuotaExceeded(res, "jobs", owner.maxOpen, submitted.ownerOpen,
                              "you have " + std::to_string(submitted.ownerOpen) +
                                  " jobs queued or running, the most one person may (--quota-jobs " +
-                                 std::to_string(owner.maxOpen) + "); wait for one or cancel it (DELETE /api/jobs/{id})");
+                                 std::to_string(owner.maxOpen) +
+                                 "); wait for one or cancel it (DELETE /api/jobs/{id})");
   sendError(res, ErrorCode::TooManyJobs, serverCap);
 }
 

@@ -62,8 +62,8 @@ std::string metricsText(const Service& service) {
   out.histogram("brdfa_queue_wait_seconds", service.metrics.uploadQueueWait.snapshot(), {{"queue", "upload"}});
 
   out.family("brdfa_compiles_total", "counter", "GLSL to SPIR-V compiles (SPIR-V cache misses), by result.");
-  out.sample("brdfa_compiles_total", static_cast<double>(c.glslCompiles - std::min(c.glslCompiles, c.glslCompileErrors)),
-             {{"result", "ok"}});
+  out.sample("brdfa_compiles_total",
+             static_cast<double>(c.glslCompiles - std::min(c.glslCompiles, c.glslCompileErrors)), {{"result", "ok"}});
   out.sample("brdfa_compiles_total", static_cast<double>(c.glslCompileErrors), {{"result", "error"}});
   out.family("brdfa_compile_duration_seconds", "histogram", "Wall time of one GLSL to SPIR-V compile.");
   out.histogram("brdfa_compile_duration_seconds", c.compileTime);

@@ -78,8 +78,8 @@ void registerPresetRoutes(httplib::Server& server, Service& service) {
     if (!t) return;
     std::vector<std::string> names;
     std::error_code ec;
-    for (std::filesystem::directory_iterator it(service.brdfs.presetDir(t->person, t->name), ec), end;
-         !ec && it != end; it.increment(ec)) {
+    for (std::filesystem::directory_iterator it(service.brdfs.presetDir(t->person, t->name), ec), end; !ec && it != end;
+         it.increment(ec)) {
       const std::filesystem::path& path = it->path();
       std::string stem = path.stem().string();
       if (path.extension() == ".json" && isValidBrdfName(stem)) names.push_back(stem);

@@ -92,8 +92,8 @@ void sendFrame(httplib::Response& res, const std::vector<uint8_t>& bytes, FrameF
     return sendError(res, ErrorCode::Internal, std::string("could not encode the frame as ") + infoOf(format).name);
   setFrameHeaders(res, stats);
   // `stem` is a session id ([0-9a-f]+ or "default") or "render": nothing to quote or escape.
-  res.set_header("Content-Disposition", std::string(download ? "attachment" : "inline") + "; filename=\"" + stem +
-                                            "-" + std::to_string(stats.spp) + "spp." + infoOf(format).name + "\"");
+  res.set_header("Content-Disposition", std::string(download ? "attachment" : "inline") + "; filename=\"" + stem + "-" +
+                                            std::to_string(stats.spp) + "spp." + infoOf(format).name + "\"");
   res.set_content(reinterpret_cast<const char*>(bytes.data()), bytes.size(), infoOf(format).contentType);
 }
 
@@ -106,8 +106,10 @@ bool takeRenderSlot(Service& service, const httplib::Request& req, httplib::Resp
   int held = 0;
   if (!service.rendersInFlight.take(who.owner(), limit, held)) {
     sendQuotaExceeded(res, "renders", uint64_t(limit), uint64_t(held),
-                      "you have " + std::to_string(held) + " one-shot render(s) or analyses in flight, the most one "
-                      "person may (--quota-renders " + std::to_string(limit) + "); wait for it to finish");
+                      "you have " + std::to_string(held) +
+                          " one-shot render(s) or analyses in flight, the most one "
+                          "person may (--quota-renders " +
+                          std::to_string(limit) + "); wait for it to finish");
     return false;
   }
   quota.counter = &service.rendersInFlight;

@@ -28,17 +28,17 @@ inline httplib::Server::HandlerWithContentReader withService(Service& service, R
 
 // First: the pre-routing gate (cross-site refusals, the requester's identity, 401).
 void registerAccessGate(httplib::Server& server, Service& service);
-void registerAuthRoutes(httplib::Server& server, Service& service);  // /api/auth/...
+void registerAuthRoutes(httplib::Server& server, Service& service);    // /api/auth/...
 void registerSystemRoutes(httplib::Server& server, Service& service);  // health, handlers
-void registerBrdfRoutes(httplib::Server& server, Service& service);  // registers the presets' first
+void registerBrdfRoutes(httplib::Server& server, Service& service);    // registers the presets' first
 void registerPresetRoutes(httplib::Server& server, Service& service);
 void registerSessionRoutes(httplib::Server& server, Service& service);
 void registerRenderRoutes(httplib::Server& server, Service& service);
-void registerAnalysisRoutes(httplib::Server& server, Service& service);  // plots of BRDFs
+void registerAnalysisRoutes(httplib::Server& server, Service& service);    // plots of BRDFs
 void registerDifferenceRoutes(httplib::Server& server, Service& service);  // side by side: A - B
-void registerJobRoutes(httplib::Server& server, Service& service);  // batch tests
-void registerAssetRoutes(httplib::Server& server, Service& service);  // uploads, listing
-void registerStaticRoutes(httplib::Server& server, Service& service);  // last: catch-all GET
+void registerJobRoutes(httplib::Server& server, Service& service);         // batch tests
+void registerAssetRoutes(httplib::Server& server, Service& service);       // uploads, listing
+void registerStaticRoutes(httplib::Server& server, Service& service);      // last: catch-all GET
 
 // GET /metrics' body: the Prometheus text format (metrics_exposition.cpp).
 std::string metricsText(const Service& service);

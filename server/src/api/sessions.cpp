@@ -336,9 +336,7 @@ void deleteSession(Service& service, const httplib::Request& req, httplib::Respo
                        "session");
   }
   switch (service.sessions->remove(id)) {
-    case SessionManager::RemoveOutcome::Removed:
-      res.status = 204;
-      return;
+    case SessionManager::RemoveOutcome::Removed: res.status = 204; return;
     case SessionManager::RemoveOutcome::NotFound:
       return sendError(res, ErrorCode::NotFound, "no session '" + id + "'", "session");
     case SessionManager::RemoveOutcome::Protected:

@@ -111,15 +111,11 @@ void registerSystemRoutes(httplib::Server& server, Service& service) {
         if (!res.body.empty() || res.content_provider_) return httplib::Server::HandlerResponse::Unhandled;
         std::string message;
         switch (res.status) {
-          case 404:
-            message = "no such resource: " + req.method + " " + req.path;
-            break;
+          case 404: message = "no such resource: " + req.method + " " + req.path; break;
           case 413:  // only httplib's own limit gets here: the largest body any route takes (an upload)
             message = "request body is larger than " + std::to_string(service.maxRequestBody()) + " bytes";
             break;
-          default:
-            message = "HTTP " + std::to_string(res.status) + " for " + req.method + " " + req.path;
-            break;
+          default: message = "HTTP " + std::to_string(res.status) + " for " + req.method + " " + req.path; break;
         }
         sendStatusError(res, message);
         return httplib::Server::HandlerResponse::Handled;

@@ -93,7 +93,8 @@ Result<std::unique_ptr<Authenticator>> Authenticator::create(const ServerConfig&
     case AuthMode::Proxy:
       for (const std::string& text : config.auth.proxyFrom) {
         std::optional<AddressRange> range = parseAddressRange(text);
-        if (!range) return makeError(ErrorCode::InvalidArgument, "--proxy-from '" + text + "' is not an address or range");
+        if (!range)
+          return makeError(ErrorCode::InvalidArgument, "--proxy-from '" + text + "' is not an address or range");
         auth->proxyFrom_.push_back(*range);
       }
       break;
@@ -115,12 +116,12 @@ std::string Authenticator::bearerToken(const httplib::Request& req) {
 
 std::optional<Identity> Authenticator::identify(const httplib::Request& req) const {
   switch (settings_.mode) {
-    case AuthMode::None:
-      return localIdentity();
+    case AuthMode::None: return localIdentity();
     case AuthMode::Tokens: {
       const std::string token = bearerToken(req);
       if (token.empty()) return std::nullopt;
-      if (constantTimeEqual(sha256Hex(token), adminDigest_)) return Identity{"teacher", "Teacher", Role::Teacher, "admin"};
+      if (constantTimeEqual(sha256Hex(token), adminDigest_))
+        return Identity{"teacher", "Teacher", Role::Teacher, "admin"};
       return users_->authenticate(token);
     }
     case AuthMode::Proxy: {

@@ -21,7 +21,7 @@ struct Identity {
   std::string user;         // "" in none mode
   std::string displayName;  // free text, shown as text
   Role role = Role::Teacher;
-  std::string tokenId;      // tokens mode: the id of the token that authenticated the request
+  std::string tokenId;  // tokens mode: the id of the token that authenticated the request
 
   bool teacher() const { return role == Role::Teacher; }
   // The owner recorded on a session, job or preset this person makes.

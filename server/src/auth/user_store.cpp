@@ -124,8 +124,7 @@ std::optional<Identity> UserStore::authenticate(std::string_view token) const {
   return who;
 }
 
-Result<UserRecord> UserStore::addUser(const std::string& user, const std::string& displayName, Role role,
-                                      bool& taken) {
+Result<UserRecord> UserStore::addUser(const std::string& user, const std::string& displayName, Role role, bool& taken) {
   taken = false;
   if (!isValidUserName(user))
     return makeError(ErrorCode::InvalidArgument,
@@ -264,7 +263,8 @@ std::vector<JoinCodeInfo> UserStore::listJoinCodes() const {
       out.push_back(JoinCodeInfo{digest.substr(0, kTokenIdLength), stringField(j, "created_at"),
                                  stringField(j, "expires_at"), expires});
   });
-  std::sort(out.begin(), out.end(), [](const JoinCodeInfo& a, const JoinCodeInfo& b) { return a.createdAt < b.createdAt; });
+  std::sort(out.begin(), out.end(),
+            [](const JoinCodeInfo& a, const JoinCodeInfo& b) { return a.createdAt < b.createdAt; });
   return out;
 }
 

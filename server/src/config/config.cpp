@@ -54,7 +54,8 @@ std::optional<std::string> resolveAuth(ServerConfig& config, std::optional<AuthM
   if (config.auth.mode == AuthMode::Proxy && config.auth.proxyFrom.empty())
     return "--auth proxy needs --proxy-from ADDR[/BITS]: the front whose user header is trusted";
   for (const std::string& range : config.auth.proxyFrom)
-    if (!parseAddressRange(range)) return "--proxy-from '" + range + "' is not an IPv4 or IPv6 address or ADDR/BITS range";
+    if (!parseAddressRange(range))
+      return "--proxy-from '" + range + "' is not an IPv4 or IPv6 address or ADDR/BITS range";
   for (const std::string& name : config.auth.proxyAdmins)
     if (!isValidUserName(name)) return "--proxy-admin '" + name + "' is not a valid user name ([a-z0-9._@-], 1-64)";
   return std::nullopt;
@@ -337,8 +338,10 @@ ParseOutcome parse_command_line(int argc, const char* const* argv) {
       return fail(*err + "\n" + usageText(argv[0]));
   }
   if (!config.replica.empty() && !isValidReplicaTag(config.replica))
-    return fail("--replica (or $BRDFA_REPLICA) must be 1-63 of [a-z0-9-], starting and ending with a letter or "
-                "digit, got '" + config.replica + "'\n" + usageText(argv[0]));
+    return fail(
+        "--replica (or $BRDFA_REPLICA) must be 1-63 of [a-z0-9-], starting and ending with a letter or "
+        "digit, got '" +
+        config.replica + "'\n" + usageText(argv[0]));
   if (std::optional<std::string> err = resolveAuth(config, state.authMode))
     return fail(*err + "\n" + usageText(argv[0]));
   ParseOutcome out;

@@ -16,22 +16,22 @@ const char* authModeName(AuthMode mode);  // "none", "tokens", "proxy"
 
 // How requests say who asks (docs/api.md, Identities and ownership).
 struct AuthSettings {
-  AuthMode mode = AuthMode::None;  // --auth; unset on the command line: none on loopback, else tokens
-  bool allowUnauthenticated = false;  // --allow-unauthenticated: none on a non-loopback address
-  std::string adminTokenFile;         // --admin-token-file (tokens mode)
+  AuthMode mode = AuthMode::None;                    // --auth; unset on the command line: none on loopback, else tokens
+  bool allowUnauthenticated = false;                 // --allow-unauthenticated: none on a non-loopback address
+  std::string adminTokenFile;                        // --admin-token-file (tokens mode)
   std::string proxyUserHeader = "X-Forwarded-User";  // --proxy-user-header (proxy mode)
-  std::vector<std::string> proxyFrom;    // --proxy-from ADDR[/BITS], repeatable (proxy mode)
-  std::vector<std::string> proxyAdmins;  // --proxy-admin NAME, repeatable (proxy mode)
+  std::vector<std::string> proxyFrom;                // --proxy-from ADDR[/BITS], repeatable (proxy mode)
+  std::vector<std::string> proxyAdmins;              // --proxy-admin NAME, repeatable (proxy mode)
 };
 
 // What one student may hold at once; the teacher has no quota. Each has a flag of its name.
 struct Quotas {
-  int sessions = 3;                    // --quota-sessions
-  int brdfs = 100;                     // --quota-brdfs: saved BRDFs, the editor's scratch ones too
-  int uploads = 20;                    // --quota-uploads
-  uint64_t uploadBytes = 256ull << 20; // --quota-upload-bytes
-  int jobs = 2;                        // --quota-jobs: queued or running
-  int renders = 1;                     // --quota-renders: one-shot renders and analyses in flight
+  int sessions = 3;                     // --quota-sessions
+  int brdfs = 100;                      // --quota-brdfs: saved BRDFs, the editor's scratch ones too
+  int uploads = 20;                     // --quota-uploads
+  uint64_t uploadBytes = 256ull << 20;  // --quota-upload-bytes
+  int jobs = 2;                         // --quota-jobs: queued or running
+  int renders = 1;                      // --quota-renders: one-shot renders and analyses in flight
 };
 
 struct ServerConfig {
@@ -46,22 +46,22 @@ struct ServerConfig {
   int idleTimeoutSec = 30;         // a session with no watcher for this long stops rendering
   int sessionReclaimSec = 600;     // at the session cap, one unused this long makes room
   // Uploads (POST /api/assets), stored in <dataDir>/assets. Each limit has a flag of its name.
-  uint64_t maxUploadBytes = 64ull << 20;      // --max-upload-bytes: one file's size
-  uint64_t maxUploadTriangles = 2'000'000;    // --max-upload-triangles: of one mesh
-  uint64_t maxUploadPixels = 16'777'216;      // --max-upload-pixels: width * height of one image
-  int maxAssets = 1000;                       // --max-assets: stored uploads (0 disables uploads)
-  uint64_t maxAssetsBytes = 4ull << 30;       // --max-assets-bytes: all stored upload files together
-  int compileTimeoutSec = 5;                  // --compile-timeout: one GLSL compile's wall clock
-  int compileMemoryMiB = 0;                   // --compile-memory: one GLSL compile's memory; 0: --max-memory / 16, in 64..1024
+  uint64_t maxUploadBytes = 64ull << 20;    // --max-upload-bytes: one file's size
+  uint64_t maxUploadTriangles = 2'000'000;  // --max-upload-triangles: of one mesh
+  uint64_t maxUploadPixels = 16'777'216;    // --max-upload-pixels: width * height of one image
+  int maxAssets = 1000;                     // --max-assets: stored uploads (0 disables uploads)
+  uint64_t maxAssetsBytes = 4ull << 30;     // --max-assets-bytes: all stored upload files together
+  int compileTimeoutSec = 5;                // --compile-timeout: one GLSL compile's wall clock
+  int compileMemoryMiB = 0;  // --compile-memory: one GLSL compile's memory; 0: --max-memory / 16, in 64..1024
   // The render worker's watchdog (remote_renderer.h); --in-process turns it off.
-  double buildBudgetSec = 10;                 // --build-budget: one pipeline build
-  double passBudgetSec = 1.5;                 // --pass-budget: one queue submission of a pass
-  double checkBudgetSec = 120;                // --check-budget: one submission of a BRDF check
-  bool inProcess = false;                     // --in-process: no render worker
-  uint64_t maxMemoryMiB = 0;                  // --max-memory: all sessions' render targets; 0: half the RAM
+  double buildBudgetSec = 10;   // --build-budget: one pipeline build
+  double passBudgetSec = 1.5;   // --pass-budget: one queue submission of a pass
+  double checkBudgetSec = 120;  // --check-budget: one submission of a BRDF check
+  bool inProcess = false;       // --in-process: no render worker
+  uint64_t maxMemoryMiB = 0;    // --max-memory: all sessions' render targets; 0: half the RAM
   // Slow or greedy clients: see ConnectionLimits in connection_guard.h.
-  int maxConnectionsPerAddress = 32;          // --max-connections-per-address: open at once
-  int requestReadTimeoutSec = 10;             // --request-read-timeout: to receive one request
+  int maxConnectionsPerAddress = 32;  // --max-connections-per-address: open at once
+  int requestReadTimeoutSec = 10;     // --request-read-timeout: to receive one request
   // --environment-dir (repeatable): folders whose *.exr become read-only environments
   // `blender_<stem>`. Unset: Debian blender-data's studio-light worlds, when installed.
   std::optional<std::vector<std::string>> environmentDirs;

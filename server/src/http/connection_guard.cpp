@@ -85,8 +85,8 @@ bool addressOf(int fd, bool peer, std::string& address, int& port) {
 // served; only waiting for more is refused.
 class DeadlineStream final : public httplib::Stream {
  public:
-  DeadlineStream(int fd, std::string address, int port, const std::atomic<socket_t>& listener,
-                 milliseconds readTimeout, milliseconds writeTimeout)
+  DeadlineStream(int fd, std::string address, int port, const std::atomic<socket_t>& listener, milliseconds readTimeout,
+                 milliseconds writeTimeout)
       : fd_(fd),
         address_(std::move(address)),
         port_(port),

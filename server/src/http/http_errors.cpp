@@ -6,28 +6,17 @@ namespace brdfa::server {
 
 const char* errorNameForStatus(int status) {
   switch (status) {
-    case 400:
-      return "bad_request";
-    case 404:
-      return "not_found";
-    case 405:
-      return "method_not_allowed";
-    case 409:
-      return "conflict";
-    case 413:
-      return "payload_too_large";
-    case 414:
-      return "uri_too_long";
-    case 416:
-      return "range_not_satisfiable";
-    case 422:
-      return "compile_error";
-    case 429:
-      return "too_many_sessions";
-    case 503:
-      return "unavailable";
-    default:
-      return status >= 500 ? "internal" : "bad_request";
+    case 400: return "bad_request";
+    case 404: return "not_found";
+    case 405: return "method_not_allowed";
+    case 409: return "conflict";
+    case 413: return "payload_too_large";
+    case 414: return "uri_too_long";
+    case 416: return "range_not_satisfiable";
+    case 422: return "compile_error";
+    case 429: return "too_many_sessions";
+    case 503: return "unavailable";
+    default: return status >= 500 ? "internal" : "bad_request";
   }
 }
 

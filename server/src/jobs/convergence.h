@@ -21,7 +21,7 @@ struct ConvergencePoint {
   double elapsedMs = 0;  // render time since the restart
   uint64_t spp = 0;
   double relError = 0;
-  uint64_t passes = 0;   // passes when the point was recorded
+  uint64_t passes = 0;  // passes when the point was recorded
 };
 
 // log(rel_error) = intercept + slope * log(elapsed_ms - offsetMs), natural logarithms.

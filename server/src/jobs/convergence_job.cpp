@@ -24,18 +24,18 @@ Error invalid(const std::string& field, const std::string& message) {
 
 // An integer in [lo, hi] (300 or 300.0, never 300.5).
 Result<int> readMs(const json& v, const std::string& field, int lo, int hi) {
-  const std::string range = "an integer number of milliseconds in [" + std::to_string(lo) + ", " + std::to_string(hi) + "]";
+  const std::string range =
+      "an integer number of milliseconds in [" + std::to_string(lo) + ", " + std::to_string(hi) + "]";
   if (!v.is_number()) return invalid(field, "expected " + range + ", got " + v.type_name());
   const double d = v.get<double>();
-  if (!std::isfinite(d) || d != std::floor(d) || d < lo || d > hi) return invalid(field, "must be " + range + ", got " + v.dump());
+  if (!std::isfinite(d) || d != std::floor(d) || d < lo || d > hi)
+    return invalid(field, "must be " + range + ", got " + v.dump());
   return static_cast<int>(d);
 }
 
 double luminance(const float* p) { return 0.2126 * p[0] + 0.7152 * p[1] + 0.0722 * p[2]; }
 
-json optionalNumber(const std::optional<double>& v) {
-  return v && std::isfinite(*v) ? json(*v) : json(nullptr);
-}
+json optionalNumber(const std::optional<double>& v) { return v && std::isfinite(*v) ? json(*v) : json(nullptr); }
 
 Error cancelledError() { return makeError(ErrorCode::Internal, "cancelled"); }
 
@@ -77,7 +77,8 @@ Result<ConvergenceJobSpec> parseConvergenceJob(const json& body, const SceneReso
       SamplingMode mode{};
       if (!m.is_string() || !samplingModeFromName(m.get<std::string>(), mode))
         return invalid(field, std::string("must be ") + kSamplingChoices + ", got " + m.dump());
-      if (!seen.insert(m.get<std::string>()).second) return invalid(field, "\"" + m.get<std::string>() + "\" is listed twice");
+      if (!seen.insert(m.get<std::string>()).second)
+        return invalid(field, "\"" + m.get<std::string>() + "\" is listed twice");
       spec.modes.push_back(mode);
     }
   } else {
@@ -136,7 +137,8 @@ Scene convergenceBaseScene(const ConvergenceJobSpec& spec) {
   base.render.maxSamples = kMaxTotalSamples;
   base.render.targetError = 0;
   const int pixels = base.render.width * base.render.height;
-  base.render.samplesPerFrame = std::clamp(kConvergenceSamplesPerPass / std::max(pixels, 1), 1, base.render.samplesPerFrame);
+  base.render.samplesPerFrame =
+      std::clamp(kConvergenceSamplesPerPass / std::max(pixels, 1), 1, base.render.samplesPerFrame);
   return base;
 }
 
@@ -207,7 +209,8 @@ Result<std::vector<Run>> startRuns(Renderer& renderer, const ConvergenceJobSpec&
 std::vector<double> checkpointTimes(const ConvergenceJobSpec& spec) {
   std::vector<double> checkpoints(kConvergenceCheckpoints);
   for (int k = 0; k < kConvergenceCheckpoints; ++k)
-    checkpoints[k] = spec.timeMs * std::pow(64.0, double(k - (kConvergenceCheckpoints - 1)) / (kConvergenceCheckpoints - 1));
+    checkpoints[k] =
+        spec.timeMs * std::pow(64.0, double(k - (kConvergenceCheckpoints - 1)) / (kConvergenceCheckpoints - 1));
   checkpoints.back() = spec.timeMs;
   return checkpoints;
 }
@@ -243,7 +246,8 @@ Result<void> runToCheckpoints(std::vector<Run>& runs, const std::vector<double>&
     if (context.cancelled()) return cancelledError();
     Run* slowest = nullptr;
     for (Run& run : runs)
-      if (!run.done && run.stats.elapsedMs < spec.timeMs && (!slowest || run.stats.elapsedMs < slowest->stats.elapsedMs))
+      if (!run.done && run.stats.elapsedMs < spec.timeMs &&
+          (!slowest || run.stats.elapsedMs < slowest->stats.elapsedMs))
         slowest = &run;
     double reached = std::numeric_limits<double>::infinity();
     for (const Run& run : runs)
@@ -280,7 +284,8 @@ Comparison compareRuns(const std::vector<Run>& runs) {
   std::optional<double> cosineMse;
   for (const Run& run : runs)
     if (run.mode == SamplingMode::Cosine) cosineMse = relmse(run.last);
-  const bool haveCosine = std::any_of(runs.begin(), runs.end(), [](const Run& r) { return r.mode == SamplingMode::Cosine; });
+  const bool haveCosine =
+      std::any_of(runs.begin(), runs.end(), [](const Run& r) { return r.mode == SamplingMode::Cosine; });
   Comparison out;
   out.ratios = haveCosine ? json::object() : json(nullptr);
   out.best = nullptr;

@@ -212,7 +212,10 @@ std::optional<json> JobManager::describe(const std::string& id) const {
                           : job->error   ? "failed"
                           : job->running ? "running"
                                          : "queued";
-      json out{{"id", job->id}, {"kind", jobKindName(job->kind)}, {"state", state}, {"progress", job->progress},
+      json out{{"id", job->id},
+               {"kind", jobKindName(job->kind)},
+               {"state", state},
+               {"progress", job->progress},
                {"request", job->request}};
       if (job->result) out["result"] = *job->result;
       if (job->error) {
@@ -289,22 +292,20 @@ json JobManager::runItem(const JobItem& item) {
   bool ok = true;
   if (checked) {
     const BrdfCheckReport& r = checked.value();
-    out["checks"] = {{"nan", r.nanCount},
-                     {"inf", r.infCount},
-                     {"negative", r.negativeCount},
-                     {"max_albedo", r.maxAlbedo},
-                     {"max_albedo_std_error", r.maxAlbedoStdError},
-                     {"albedo_above_one", r.albedoAboveOne},
-                     {"max_reciprocity_error", r.maxReciprocityError},
-                     {"evaluations", r.evaluations},
-                     {"left_out", r.leftOut},
-                     {"worst",
-                      {{"reciprocity", r.worstReciprocity},
-                       {"bad_value", r.firstBadValue},
-                       {"albedo", r.worstAlbedo}}},
-                     {"claims", claimsJson(r.claims)},
-                     {"claims_declared", item.definition->claims.declared},
-                     {"ms", r.ms}};
+    out["checks"] = {
+        {"nan", r.nanCount},
+        {"inf", r.infCount},
+        {"negative", r.negativeCount},
+        {"max_albedo", r.maxAlbedo},
+        {"max_albedo_std_error", r.maxAlbedoStdError},
+        {"albedo_above_one", r.albedoAboveOne},
+        {"max_reciprocity_error", r.maxReciprocityError},
+        {"evaluations", r.evaluations},
+        {"left_out", r.leftOut},
+        {"worst", {{"reciprocity", r.worstReciprocity}, {"bad_value", r.firstBadValue}, {"albedo", r.worstAlbedo}}},
+        {"claims", claimsJson(r.claims)},
+        {"claims_declared", item.definition->claims.declared},
+        {"ms", r.ms}};
     ok = r.ok();
     for (const ClaimVerdict& c : r.claims)
       if (c.claimed && !c.holds) log.push_back("check: claim '" + c.name + "' violated: " + c.measured);

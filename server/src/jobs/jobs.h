@@ -25,7 +25,7 @@
 namespace brdfa::server {
 
 inline constexpr int kJobWorkers = 2;
-inline constexpr size_t kMaxJobs = 32;  // kept; the oldest finished job is dropped beyond
+inline constexpr size_t kMaxJobs = 32;           // kept; the oldest finished job is dropped beyond
 inline constexpr size_t kMaxOpenRunnerJobs = 4;  // queued or running one-piece jobs; refused beyond
 
 // One BRDF to test: its definition, or the parse error of a broken saved file.

@@ -8,10 +8,8 @@ const char* brdfFormatName(BrdfFormat format) { return format == BrdfFormat::Leg
 
 nlohmann::json paramValueToJson(ParamType type, const Vec3& value) {
   switch (type) {
-    case ParamType::Float:
-      return floatForJson(value[0]);
-    case ParamType::Bool:
-      return value[0] != 0.0f;
+    case ParamType::Float: return floatForJson(value[0]);
+    case ParamType::Bool: return value[0] != 0.0f;
     case ParamType::Color:
       return nlohmann::json::array({floatForJson(value[0]), floatForJson(value[1]), floatForJson(value[2])});
   }

@@ -237,7 +237,8 @@ Vec3 clampParam(const BrdfParam& p, Vec3 value, const std::string& field, const 
   }
   if (clamped == value) return value;
   if (n == 3) was = "[" + was + "]", now = "[" + now + "]";
-  note = field + ": " + was + " is outside " + brdfName + "'s range " + text(lo) + ".." + text(hi) + "; clamped to " + now;
+  note =
+      field + ": " + was + " is outside " + brdfName + "'s range " + text(lo) + ".." + text(hi) + "; clamped to " + now;
   return clamped;
 }
 

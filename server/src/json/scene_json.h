@@ -1,5 +1,5 @@
-// Scene JSON (docs/design.md section 4.1, docs/api.md Scene JSON) <-> brdfa::Scene. Every field is optional; missing ones take
-// the defaults below. Validation is strict and names the offending field ("render.width",
+// Scene JSON (docs/design.md section 4.1, docs/api.md Scene JSON) <-> brdfa::Scene. Every field is optional; missing
+// ones take the defaults below. Validation is strict and names the offending field ("render.width",
 // "objects[0].params.Kd"): wrong types, non-finite or absurd numbers and unknown keys are
 // InvalidArgument (400), unknown BRDF/environment/mesh names NotFound (404).
 #pragma once

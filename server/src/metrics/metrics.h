@@ -16,9 +16,9 @@ namespace brdfa::server {
 
 class ServiceMetrics {
  public:
-  DurationRecorder passTime;         // one progressive pass of a session (RenderView::renderPass)
-  DurationRecorder renderQueueWait;  // a one-shot render or analysis waiting for a render slot
-  DurationRecorder uploadQueueWait;  // an upload waiting for a check slot
+  DurationRecorder passTime;                 // one progressive pass of a session (RenderView::renderPass)
+  DurationRecorder renderQueueWait;          // a one-shot render or analysis waiting for a render slot
+  DurationRecorder uploadQueueWait;          // an upload waiting for a check slot
   std::atomic<uint64_t> samplesRendered{0};  // pixel samples of sessions' passes
 
   // One answered request: by status, and when it is an error (>= 400), by its JSON error name.

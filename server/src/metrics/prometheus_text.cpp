@@ -11,10 +11,14 @@ namespace {
 std::string escaped(std::string_view text, bool quotes) {
   std::string out;
   for (char c : text) {
-    if (c == '\\') out += "\\\\";
-    else if (c == '\n') out += "\\n";
-    else if (c == '"' && quotes) out += "\\\"";
-    else out += c;
+    if (c == '\\')
+      out += "\\\\";
+    else if (c == '\n')
+      out += "\\n";
+    else if (c == '"' && quotes)
+      out += "\\\"";
+    else
+      out += c;
   }
   return out;
 }
@@ -24,7 +28,8 @@ std::string number(double v) {
   if (std::isinf(v)) return v > 0 ? "+Inf" : "-Inf";
   char buf[40];
   // Whole numbers (counts, bytes) exactly; others with enough digits to round-trip.
-  if (v == std::floor(v) && std::fabs(v) < 1e15) std::snprintf(buf, sizeof buf, "%.0f", v);
+  if (v == std::floor(v) && std::fabs(v) < 1e15)
+    std::snprintf(buf, sizeof buf, "%.0f", v);
   else {
     // The shortest of 15 or 17 digits that reads back as v: le="0.0025", not 0.0025000000000000001.
     std::snprintf(buf, sizeof buf, "%.15g", v);
@@ -60,7 +65,8 @@ void PrometheusText::histogram(std::string_view name, const DurationHistogram& h
   for (size_t i = 0; i < h.counts.size(); ++i) {
     cumulative += h.counts[i];
     PrometheusLabels withLe = labels;
-    withLe.emplace_back("le", i < DurationHistogram::kBoundsSec.size() ? number(DurationHistogram::kBoundsSec[i]) : "+Inf");
+    withLe.emplace_back("le",
+                        i < DurationHistogram::kBoundsSec.size() ? number(DurationHistogram::kBoundsSec[i]) : "+Inf");
     sample(base + "_bucket", static_cast<double>(cumulative), withLe);
   }
   sample(base + "_sum", h.sumSec, labels);

@@ -97,8 +97,7 @@ Result<std::unique_ptr<Service>> Service::create(const ServerConfig& config, std
   assetLimits.file.maxPixels = config.maxUploadPixels;
   assetLimits.maxAssets = static_cast<size_t>(config.maxAssets);
   assetLimits.maxTotalBytes = config.maxAssetsBytes;
-  service->assets =
-      std::make_unique<AssetStore>(service->renderer, config.dataDir, assetLimits, service->uploadSlots);
+  service->assets = std::make_unique<AssetStore>(service->renderer, config.dataDir, assetLimits, service->uploadSlots);
   for (std::string& msg : service->assets->load(config.environmentDirs)) log.push_back(std::move(msg));
 
   for (std::string& msg :
@@ -114,8 +113,8 @@ Result<std::unique_ptr<Service>> Service::create(const ServerConfig& config, std
       &service->metrics);
   if (!config.replica.empty()) {
     SessionManager* sessions = service->sessions.get();
-    service->directory = std::make_unique<SessionDirectory>(config.dataDir, config.replica,
-                                                            [sessions] { return sessions->list(); });
+    service->directory =
+        std::make_unique<SessionDirectory>(config.dataDir, config.replica, [sessions] { return sessions->list(); });
     SessionDirectory* directory = service->directory.get();
     sessions->onChange([directory] { directory->publish(); });
     directory->start();

@@ -37,9 +37,9 @@ inline constexpr int kMaxConcurrentRenders = 2;             // one-shot renders 
 inline constexpr std::chrono::seconds kRenderSlotWait{30};  // then 503 busy
 inline constexpr std::chrono::seconds kFrameWait{60};       // min_spp wait bound
 inline constexpr int kMaxOneShotSpp = 65536;
-inline constexpr int kMaxQueuedRenders = 8;  // waiting for a slot; 503 beyond
-inline constexpr int kMaxConcurrentUploadChecks = 2;  // uploads decoded by inspectAsset at once
-inline constexpr int kMaxQueuedUploadChecks = 8;      // waiting for one; 503 beyond
+inline constexpr int kMaxQueuedRenders = 8;                   // waiting for a slot; 503 beyond
+inline constexpr int kMaxConcurrentUploadChecks = 2;          // uploads decoded by inspectAsset at once
+inline constexpr int kMaxQueuedUploadChecks = 8;              // waiting for one; 503 beyond
 inline constexpr std::chrono::seconds kUploadMemoryWait{30};  // for room in the uploads' share; then 503
 // Room for the multipart framing around a file of --max-upload-bytes (boundaries, part
 // headers, the `kind` field): the HTTP payload limit is max-upload-bytes plus this.
@@ -67,8 +67,8 @@ inline bool canReadBrdf(const Identity& who, const BrokenBrdf& broken) {
 }
 
 struct Service {
-  // Opens the device, loads the built-in and saved user BRDFs (parsed only) and sets up the `default` session (its scene is
-  // applied lazily, on first use). `log` receives start-up warnings.
+  // Opens the device, loads the built-in and saved user BRDFs (parsed only) and sets up the `default` session (its
+  // scene is applied lazily, on first use). `log` receives start-up warnings.
   static Result<std::unique_ptr<Service>> create(const ServerConfig& config, std::vector<std::string>& log);
 
   // The largest request body the HTTP layer reads: a JSON body or an upload with its framing.
@@ -93,7 +93,7 @@ struct Service {
   ServiceMetrics metrics;
   // "<replica>." with --replica, else empty: the start of session and job ids.
   std::string idPrefix() const { return config.replica.empty() ? std::string() : config.replica + "."; }
-  std::shared_ptr<Renderer> renderer;  // declared before sessions: views die before the device
+  std::shared_ptr<Renderer> renderer;   // declared before sessions: views die before the device
   std::unique_ptr<Authenticator> auth;  // who a request acts for (--auth)
   BrdfCatalog brdfs;                    // built-ins, the course's and every student's
   OwnerCounter rendersInFlight;         // one-shot renders and analyses, per person (--quota-renders)
@@ -101,7 +101,7 @@ struct Service {
   // Upload bodies in flight, in bytes: their share of --max-memory (memoryBudgetBytes / 8), the
   // renderer has the rest.
   std::unique_ptr<RenderSlots> uploadMemory;
-  uint64_t memoryBudgetBytes = 0;  // --max-memory, or half the RAM
+  uint64_t memoryBudgetBytes = 0;      // --max-memory, or half the RAM
   std::unique_ptr<AssetStore> assets;  // uploads and Blender worlds, registered with the renderer
   std::unique_ptr<SessionManager> sessions;
   // With --replica: the sessions of every replica on this data folder (after `sessions`, so it

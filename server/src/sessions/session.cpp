@@ -24,7 +24,11 @@ void nameThisThread(const char* name) { ::pthread_setname_np(::pthread_self(), n
 
 Session::Session(std::string id, std::unique_ptr<RenderView> view, std::chrono::milliseconds idleTimeout,
                  ServiceMetrics* metrics, SessionOwnership ownership)
-    : id_(std::move(id)), ownership_(std::move(ownership)), view_(std::move(view)), idleTimeout_(idleTimeout), metrics_(metrics) {
+    : id_(std::move(id)),
+      ownership_(std::move(ownership)),
+      view_(std::move(view)),
+      idleTimeout_(idleTimeout),
+      metrics_(metrics) {
   thread_ = std::thread([this] {
     nameThisThread("brdfa-render");
     guarded(&Session::renderLoop);
@@ -221,8 +225,8 @@ bool Session::watchedLocked(Clock::time_point now) const {
   return streamClients_ > 0 || waiters_ > 0 || now < watchedUntil_;
 }
 
-Result<Session::EncodedFrame> Session::waitAndEncodeFrame(uint64_t minSpp, std::chrono::milliseconds timeout,
-                                                          bool pfm, WaitOutcome& outcome) {
+Result<Session::EncodedFrame> Session::waitAndEncodeFrame(uint64_t minSpp, std::chrono::milliseconds timeout, bool pfm,
+                                                          WaitOutcome& outcome) {
   {
     std::unique_lock lock(mutex_);
     const uint64_t target = std::min<uint64_t>(minSpp, static_cast<uint64_t>(std::max(maxSamples_, 0)));
@@ -283,7 +287,7 @@ int Session::streamClients() const {
 }
 
 std::optional<StreamFrame> Session::waitForStreamFrame(uint64_t afterSeq, std::chrono::milliseconds timeout,
-                                                      uint64_t minSceneVersion) {
+                                                       uint64_t minSceneVersion) {
   std::unique_lock lock(mutex_);
   auto fresh = [&] { return latest_.seq > afterSeq && latest_.png && latest_.sceneVersion >= minSceneVersion; };
   frames_.wait_for(lock, timeout, [&] { return stopping_ || fresh(); });
@@ -402,9 +406,10 @@ void Session::renderLoop() {
     // A first sample stands for kFirstPassGrace unless a reader waits for more samples.
     const Clock::time_point graceEnd = provisionalSince_ + kFirstPassGrace;
     const bool inGrace = stats_.provisional && waitTargets_.empty() && now < graceEnd;
-    bool wantPass = canRender && !stats_.done() && watchedLocked(now) && pendingViewCalls_ == 0 && !waiterSatisfied &&
-                    !inGrace;
-    bool wantPublish = canRender && streamClients_ > 0 && publishRequested_ && hasImageLocked() && pendingViewCalls_ == 0;
+    bool wantPass =
+        canRender && !stats_.done() && watchedLocked(now) && pendingViewCalls_ == 0 && !waiterSatisfied && !inGrace;
+    bool wantPublish =
+        canRender && streamClients_ > 0 && publishRequested_ && hasImageLocked() && pendingViewCalls_ == 0;
     if (!wantPass && !wantPublish) {
       // Nothing to do until a scene change, a watcher, a stream client or stop (or the grace's
       // end). A watched-until deadline needs no timed wake: it only ever turns rendering off,
@@ -443,8 +448,8 @@ void Session::renderLoop() {
       if (metrics_) {
         metrics_->passTime.add(pass->lastPassMs / 1000.0);
         // The pass's own samples; a scene applied meanwhile restarted the count from 0.
-        const uint64_t spp = pass->sceneVersion == versionBefore && pass->spp >= sppBefore ? pass->spp - sppBefore
-                                                                                          : pass->spp;
+        const uint64_t spp =
+            pass->sceneVersion == versionBefore && pass->spp >= sppBefore ? pass->spp - sppBefore : pass->spp;
         metrics_->samplesRendered += spp * pixels;
       }
       noteStatsLocked(pass.value(), true);
@@ -454,8 +459,8 @@ void Session::renderLoop() {
       bool due = publishRequested_ || stats_.done() || Clock::now() - lastPublish_ >= kPublishInterval;
       // A pass interrupted for a scene change (RenderView::interruptPass) added nothing to show
       // (the change comes next). One that returned at its frame target has (passInProgress).
-      const bool progressed = pass->passes != passesBefore || pass->spp != sppBefore || pass->preview != previewBefore ||
-                              pass->passInProgress;
+      const bool progressed = pass->passes != passesBefore || pass->spp != sppBefore ||
+                              pass->preview != previewBefore || pass->passInProgress;
       if (streamClients_ > 0 && hasImageLocked() && due && progressed) publishFrame(lock);
     } else {
       publishFrame(lock);

@@ -86,7 +86,7 @@ class Session {
   // How long nobody has used the session: 0 while a stream or a frame wait is open, else the
   // time since its creation, its last scene change or its last touch(), whichever is latest.
   std::chrono::milliseconds inactiveFor(Clock::time_point now) const;
-  FrameStats stats() const;  // as of the latest pass or frame read; never blocks on the device
+  FrameStats stats() const;               // as of the latest pass or frame read; never blocks on the device
   RenderSettings renderSettings() const;  // of the scene in place (target_error, sampling)
 
   // The error-against-time series since the last accumulation restart (see convergence.h),
@@ -168,7 +168,7 @@ class Session {
   void guarded(void (Session::*loop)());
   bool watchedLocked(Clock::time_point now) const;
   static bool hasImage(const FrameStats& stats);  // a pass or a preview is there to show
-  bool hasImageLocked() const;                     // hasImage(stats_)
+  bool hasImageLocked() const;                    // hasImage(stats_)
   void publishFrame(std::unique_lock<std::mutex>& lock);
   // Takes the stats of a pass or a frame read of the scene in place (older scenes' are dropped)
   // and feeds the convergence series. Under mutex_.

@@ -55,8 +55,8 @@ class SessionDirectory {
   const std::string replica_;
   const std::function<std::vector<std::shared_ptr<Session>>()> snapshot_;
   std::mutex publishMutex_;  // one writer at a time, so an older snapshot never lands last
-  bool warned_ = false;   // under publishMutex_
-  bool removed_ = false;  // under publishMutex_: stop() removed the file
+  bool warned_ = false;      // under publishMutex_
+  bool removed_ = false;     // under publishMutex_: stop() removed the file
   std::mutex mutex_;
   std::condition_variable wake_;
   bool stopping_ = false;

@@ -68,8 +68,10 @@ SessionManager::Created SessionManager::create(const std::string& requestedId, S
     }
     if (!stopped_ && sessions_.size() >= maxSessions_)
       if (auto abandoned = takeAbandonedLocked()) reclaimed.push_back(std::move(abandoned));
-    if (stopped_) out.error = makeError(ErrorCode::DeviceError, "server is shutting down");
-    else if (sessions_.size() >= maxSessions_) out.full = true;
+    if (stopped_)
+      out.error = makeError(ErrorCode::DeviceError, "server is shutting down");
+    else if (sessions_.size() >= maxSessions_)
+      out.full = true;
     return stopped_ || out.full;
   };
   bool reclaimedAny = false;

@@ -46,9 +46,8 @@ struct FormatInfo {
   const char* title;
 };
 constexpr FormatInfo kFormatInfo[] = {
-    {AssetFormat::Obj, "obj", "OBJ"},          {AssetFormat::Png, "png", "PNG"},
-    {AssetFormat::Jpeg, "jpg", "JPEG"},        {AssetFormat::Hdr, "hdr", "Radiance HDR"},
-    {AssetFormat::Exr, "exr", "OpenEXR"},
+    {AssetFormat::Obj, "obj", "OBJ"},          {AssetFormat::Png, "png", "PNG"},     {AssetFormat::Jpeg, "jpg", "JPEG"},
+    {AssetFormat::Hdr, "hdr", "Radiance HDR"}, {AssetFormat::Exr, "exr", "OpenEXR"},
 };
 const char* storedExtension(AssetFormat format) { return kFormatInfo[static_cast<int>(format)].extension; }
 const char* formatTitle(AssetFormat format) { return kFormatInfo[static_cast<int>(format)].title; }
@@ -86,15 +85,23 @@ TypeClaim claimOfContentType(std::string_view contentType) {
     AssetFormat format;
   };
   static const Known known[] = {
-      {"image/png", AssetFormat::Png},         {"image/x-png", AssetFormat::Png},
-      {"image/jpeg", AssetFormat::Jpeg},       {"image/jpg", AssetFormat::Jpeg},
-      {"image/pjpeg", AssetFormat::Jpeg},      {"image/vnd.radiance", AssetFormat::Hdr},
-      {"image/x-hdr", AssetFormat::Hdr},       {"image/x-radiance", AssetFormat::Hdr},
-      {"image/aces", AssetFormat::Exr},        {"image/x-exr", AssetFormat::Exr},
-      {"application/x-exr", AssetFormat::Exr}, {"model/obj", AssetFormat::Obj},
-      {"text/x-obj", AssetFormat::Obj},        {"model/x-obj", AssetFormat::Obj},
+      {"image/png", AssetFormat::Png},
+      {"image/x-png", AssetFormat::Png},
+      {"image/jpeg", AssetFormat::Jpeg},
+      {"image/jpg", AssetFormat::Jpeg},
+      {"image/pjpeg", AssetFormat::Jpeg},
+      {"image/vnd.radiance", AssetFormat::Hdr},
+      {"image/x-hdr", AssetFormat::Hdr},
+      {"image/x-radiance", AssetFormat::Hdr},
+      {"image/aces", AssetFormat::Exr},
+      {"image/x-exr", AssetFormat::Exr},
+      {"application/x-exr", AssetFormat::Exr},
+      {"model/obj", AssetFormat::Obj},
+      {"text/x-obj", AssetFormat::Obj},
+      {"model/x-obj", AssetFormat::Obj},
       // /etc/mime.types maps .obj to tgif's type, so browsers on Linux may send it for OBJ.
-      {"application/x-tgif", AssetFormat::Obj}, {"application/x-wavefront-obj", AssetFormat::Obj},
+      {"application/x-tgif", AssetFormat::Obj},
+      {"application/x-wavefront-obj", AssetFormat::Obj},
   };
   for (const Known& k : known)
     if (t == k.type) return {true, k.format};
@@ -130,7 +137,6 @@ const char* idPrefix(AssetKind kind) {
   }
   return "mesh_";
 }
-
 
 // An environment name from a Blender world's file stem: lower case, [a-z0-9_] only.
 std::string blenderName(const std::string& stem) {
@@ -200,9 +206,7 @@ const char* assetSourceName(AssetSource source) {
   return "upload";
 }
 
-const char* uploadQuotaName(UploadQuota quota) {
-  return quota == UploadQuota::Uploads ? "uploads" : "upload_bytes";
-}
+const char* uploadQuotaName(UploadQuota quota) { return quota == UploadQuota::Uploads ? "uploads" : "upload_bytes"; }
 
 const char* assetRejectionName(AssetRejection reason) {
   switch (reason) {
@@ -344,10 +348,10 @@ void AssetStore::loadEnvironmentDir(const std::string& dir, std::vector<std::str
     Result<void> registered =
         format == AssetFormat::Exr
             ? renderer_->registerAsset(name, AssetKind::Environment, fs::absolute(file, ec).string())
-            : Result<void>(makeError(ErrorCode::InvalidArgument,
-                                     bytes ? "not an EXR file"
-                                           : "unreadable, or larger than " + std::to_string(kMaxSystemAssetBytes) +
-                                                 " bytes"));
+            : Result<void>(
+                  makeError(ErrorCode::InvalidArgument,
+                            bytes ? "not an EXR file"
+                                  : "unreadable, or larger than " + std::to_string(kMaxSystemAssetBytes) + " bytes"));
     if (!registered) {
       log.push_back("warning: environment " + file.string() + " (" + name + ") skipped: " + registered.error().message);
       continue;
@@ -476,7 +480,8 @@ std::optional<Error> AssetStore::refuseWithoutRoom(const AssetUpload& up, const 
       if (r.owner == owner.user) ++count, bytes += r.bytes;
     AssetQuotaHit hit;
     bool over = true;
-    if (owner.maxUploads > 0 && count >= owner.maxUploads) hit = {UploadQuota::Uploads, owner.maxUploads, count};
+    if (owner.maxUploads > 0 && count >= owner.maxUploads)
+      hit = {UploadQuota::Uploads, owner.maxUploads, count};
     else if (owner.maxBytes > 0 && bytes + up.size > owner.maxBytes)
       hit = {UploadQuota::UploadBytes, owner.maxBytes, bytes};
     else
@@ -597,8 +602,8 @@ void AssetStore::refreshFromDisk() const {
   struct stat st {};
   if (::stat(dir_.c_str(), &st) != 0) return;
   const int64_t stamp = int64_t(st.st_mtim.tv_sec) * 1'000'000'000 + st.st_mtim.tv_nsec;
-  const int64_t now = std::chrono::duration_cast<std::chrono::nanoseconds>(
-                          std::chrono::system_clock::now().time_since_epoch()).count();
+  const int64_t now =
+      std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::system_clock::now().time_since_epoch()).count();
   // A new metadata file (a rename into the folder) changes its mtime; a change in the same clock
   // tick as the last look would not, so a stamp under a second old is never trusted.
   if (stamp == seenDirStamp_ && now - stamp > 1'000'000'000) return;

@@ -28,18 +28,18 @@ namespace brdfa::server {
 class RenderSlots;
 
 struct AssetStoreLimits {
-  AssetLimits file;               // per file: bytes, triangles, pixels
-  size_t maxAssets = 1000;        // stored uploads
+  AssetLimits file;                     // per file: bytes, triangles, pixels
+  size_t maxAssets = 1000;              // stored uploads
   uint64_t maxTotalBytes = 4ull << 30;  // all stored upload files together
 };
 
 // One file part of a multipart upload, as the client sent it.
 struct AssetUpload {
-  std::string_view bytes;  // the content; may hold only a prefix when `size` exceeds the limit
-  uint64_t size = 0;       // the part's full size in bytes
-  std::string kind;        // the `kind` form field; empty: from the content
-  std::string fileName;    // the part's file name (display only; checked against the content)
-  std::string contentType; // the part's Content-Type (checked against the content)
+  std::string_view bytes;   // the content; may hold only a prefix when `size` exceeds the limit
+  uint64_t size = 0;        // the part's full size in bytes
+  std::string kind;         // the `kind` form field; empty: from the content
+  std::string fileName;     // the part's file name (display only; checked against the content)
+  std::string contentType;  // the part's Content-Type (checked against the content)
 };
 
 // Why add() refused an upload, beside the Error (whose code maps to the HTTP status): a stable
@@ -88,8 +88,8 @@ struct AssetRecord {
   std::string name;                   // uploads: the sanitized original file name
   uint64_t bytes = 0, vertices = 0, triangles = 0;
   int width = 0, height = 0;
-  std::string created;                // uploads: ISO 8601 UTC
-  std::string owner;                  // uploads: the uploader; "" for the course's and others
+  std::string created;  // uploads: ISO 8601 UTC
+  std::string owner;    // uploads: the uploader; "" for the course's and others
 };
 
 class AssetStore {
@@ -140,7 +140,7 @@ class AssetStore {
  private:
   std::string loadOne(const std::string& id);  // "" on success, else why it was skipped
   void loadEnvironmentDir(const std::string& dir, std::vector<std::string>& log);
-  std::string newId(AssetKind kind) const;     // under mutex_
+  std::string newId(AssetKind kind) const;  // under mutex_
   // Under mutex_: the Error (and rejection) when the owner's quota or the server's caps leave no
   // room for `up`, counting uploads being written.
   std::optional<Error> refuseWithoutRoom(const AssetUpload& up, const AssetOwner& owner, AssetRejection& rejection,
@@ -157,11 +157,11 @@ class AssetStore {
   mutable std::mutex mutex_;
   std::map<std::string, AssetRecord> uploads_;  // by id
   std::map<std::string, AssetRecord> blender_;  // by name
-  std::set<std::string> writing_;  // ids this server is storing now (not another's to pick up)
+  std::set<std::string> writing_;               // ids this server is storing now (not another's to pick up)
   std::set<std::string, std::less<>> removed_;  // uploads removed since start (still registered)
-  mutable std::mutex refreshMutex_;  // order: refreshMutex_ before mutex_
-  mutable int64_t seenDirStamp_ = -2;  // the folder's mtime (ns) at the last refreshFromDisk
-  size_t reserved_ = 0;          // uploads being written (count toward the cap)
+  mutable std::mutex refreshMutex_;             // order: refreshMutex_ before mutex_
+  mutable int64_t seenDirStamp_ = -2;           // the folder's mtime (ns) at the last refreshFromDisk
+  size_t reserved_ = 0;                         // uploads being written (count toward the cap)
   uint64_t reservedBytes_ = 0;
   uint64_t storedBytes_ = 0;
   // Uploads being written, per uploader: count and bytes (they count toward AssetOwner's limits).

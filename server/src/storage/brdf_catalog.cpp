@@ -89,8 +89,8 @@ std::vector<BrokenBrdf> BrdfCatalog::listBroken() {
 }
 
 std::string BrdfCatalog::presetDir(std::string_view person, std::string_view name) const {
-  const fs::path root = person.empty() ? fs::path(dataDir_) / "presets"
-                                       : fs::path(dataDir_) / "users" / std::string(person) / "presets";
+  const fs::path root =
+      person.empty() ? fs::path(dataDir_) / "presets" : fs::path(dataDir_) / "users" / std::string(person) / "presets";
   return (root / presetKey(name)).string();
 }
 

@@ -153,8 +153,8 @@ void BrdfLibrary::refreshUserDir() const {
   if (userDir_.empty()) return;  // set once, before serving
   std::lock_guard refresh(refreshMutex_);
   const int64_t stamp = directoryStamp();
-  const int64_t now = std::chrono::duration_cast<std::chrono::nanoseconds>(
-                          std::chrono::system_clock::now().time_since_epoch()).count();
+  const int64_t now =
+      std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::system_clock::now().time_since_epoch()).count();
   // A save or delete (by this server or another replica on the shared folder: a rename or an
   // unlink) changes the folder's mtime. One in the same clock tick as the previous scan would
   // leave it as it was, so a stamp less than a second old is never trusted.
@@ -175,58 +175,61 @@ void BrdfLibrary::rescanUserDirLocked(std::vector<std::string>* log) {
     currentBroken = broken_;
   }
   std::map<std::string, FileStamp, std::less<>> stamps;
-  if (!forEachBrdfFile(userDir_, messages, [&](const std::string& name, const std::filesystem::path& path) {
-        auto it = current.find(name);
-        std::error_code markerError;
-        const bool shared = !owner_.empty() && std::filesystem::exists(sharedMarkerPath(name), markerError);
-        if (it != current.end() && it->second->builtin) {
-          messages.push_back("skipping " + path.string() + ": a built-in BRDF has that name");
-          return;
-        }
-        // A file not replaced since the last scan (same inode, size and mtime: every save is a
-        // new file renamed over the old) keeps its entry unread, so a young folder stamp, which
-        // rescans on every lookup, costs a stat per file rather than a read and parse.
-        struct stat st {};
-        if (::stat(path.c_str(), &st) == 0) {
-          const FileStamp stamp{uint64_t(st.st_ino), int64_t(st.st_size),
-                                int64_t(st.st_mtim.tv_sec) * 1'000'000'000 + st.st_mtim.tv_nsec};
-          stamps[name] = stamp;
-          auto seen = fileStamps_.find(name);
-          if (seen != fileStamps_.end() && seen->second == stamp) {
-            if (it != current.end()) {
+  if (!forEachBrdfFile(
+          userDir_, messages,
+          [&](const std::string& name, const std::filesystem::path& path) {
+            auto it = current.find(name);
+            std::error_code markerError;
+            const bool shared = !owner_.empty() && std::filesystem::exists(sharedMarkerPath(name), markerError);
+            if (it != current.end() && it->second->builtin) {
+              messages.push_back("skipping " + path.string() + ": a built-in BRDF has that name");
+              return;
+            }
+            // A file not replaced since the last scan (same inode, size and mtime: every save is a
+            // new file renamed over the old) keeps its entry unread, so a young folder stamp, which
+            // rescans on every lookup, costs a stat per file rather than a read and parse.
+            struct stat st {};
+            if (::stat(path.c_str(), &st) == 0) {
+              const FileStamp stamp{uint64_t(st.st_ino), int64_t(st.st_size),
+                                    int64_t(st.st_mtim.tv_sec) * 1'000'000'000 + st.st_mtim.tv_nsec};
+              stamps[name] = stamp;
+              auto seen = fileStamps_.find(name);
+              if (seen != fileStamps_.end() && seen->second == stamp) {
+                if (it != current.end()) {
+                  loaded[name] = withShared(it->second, shared);
+                  return;
+                }
+                if (auto b = currentBroken.find(name); b != currentBroken.end()) {
+                  broken[name] = b->second;
+                  broken[name].shared = shared;
+                  return;
+                }
+              }
+            }
+            std::string text;
+            if (!readWholeFile(path, text)) {
+              // Gone between the listing and the read (another replica's delete) is not broken.
+              if (!std::filesystem::exists(path)) return;
+              messages.push_back("user BRDF " + path.string() + " cannot be read; listed as broken");
+              broken[name] =
+                  BrokenBrdf{name, "", makeError(ErrorCode::Internal, "cannot read " + path.string()), owner_, shared};
+              return;
+            }
+            // Unchanged: keep the entry (and its definition) that scenes already resolved.
+            if (it != current.end() && it->second->source == text) {
               loaded[name] = withShared(it->second, shared);
               return;
             }
-            if (auto b = currentBroken.find(name); b != currentBroken.end()) {
-              broken[name] = b->second;
-              broken[name].shared = shared;
+            Result<BrdfDefinition> parsed = parseBrdf(text);
+            if (!parsed) {
+              messages.push_back("user BRDF " + path.string() +
+                                 " does not parse; listed as broken: " + errorText(parsed.error()));
+              broken[name] = BrokenBrdf{name, std::move(text), parsed.takeError(), owner_, shared};
               return;
             }
-          }
-        }
-        std::string text;
-        if (!readWholeFile(path, text)) {
-          // Gone between the listing and the read (another replica's delete) is not broken.
-          if (!std::filesystem::exists(path)) return;
-          messages.push_back("user BRDF " + path.string() + " cannot be read; listed as broken");
-          broken[name] =
-              BrokenBrdf{name, "", makeError(ErrorCode::Internal, "cannot read " + path.string()), owner_, shared};
-          return;
-        }
-        // Unchanged: keep the entry (and its definition) that scenes already resolved.
-        if (it != current.end() && it->second->source == text) {
-          loaded[name] = withShared(it->second, shared);
-          return;
-        }
-        Result<BrdfDefinition> parsed = parseBrdf(text);
-        if (!parsed) {
-          messages.push_back("user BRDF " + path.string() + " does not parse; listed as broken: " +
-                             errorText(parsed.error()));
-          broken[name] = BrokenBrdf{name, std::move(text), parsed.takeError(), owner_, shared};
-          return;
-        }
-        loaded[name] = makeEntry(name, std::move(text), std::move(parsed.value()), false, owner_, shared);
-      }, owner_)) {
+            loaded[name] = makeEntry(name, std::move(text), std::move(parsed.value()), false, owner_, shared);
+          },
+          owner_)) {
     if (log) log->insert(log->end(), messages.begin(), messages.end());
     return;  // an unreadable folder changes nothing
   }
@@ -270,7 +273,8 @@ Result<bool> BrdfLibrary::setShared(std::string_view name, bool shared) {
   const std::string marker = sharedMarkerPath(name);
   if (shared) {
     BRDFA_TRY(writeFileAtomically(marker, ""));
-  } else if (Result<void> removed = removeFileDurably(marker); !removed && removed.error().code != ErrorCode::NotFound) {
+  } else if (Result<void> removed = removeFileDurably(marker);
+             !removed && removed.error().code != ErrorCode::NotFound) {
     return removed.takeError();
   }
   std::lock_guard lock(mutex_);
@@ -382,6 +386,5 @@ BrdfLibrary::RemoveOutcome BrdfLibrary::remove(std::string_view name, Error* sto
   if (removeHook_) removeHook_(name);
   return RemoveOutcome::Removed;
 }
-
 
 }  // namespace brdfa::server

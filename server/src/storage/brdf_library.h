@@ -42,7 +42,7 @@ struct BrdfEntry {
 struct BrokenBrdf {
   std::string name;
   std::string source;
-  Error error;  // CompileError with diagnostics, or why the file could not be read
+  Error error;        // CompileError with diagnostics, or why the file could not be read
   std::string owner;  // as BrdfEntry::owner
   bool shared = false;
 };

@@ -15,7 +15,9 @@ void HotLoader::start(std::shared_ptr<Renderer> renderer, std::vector<std::share
   pipelines_ = 0;
   thread_ = std::thread([this, renderer = std::move(renderer), entries = std::move(entries)] {
     const auto t0 = std::chrono::steady_clock::now();
-    auto elapsed = [&] { return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count(); };
+    auto elapsed = [&] {
+      return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+    };
     for (const auto& entry : entries) {
       if (stop_) break;
       Result<int> built = renderer->preloadFromCache(*entry->definition);
