@@ -109,7 +109,7 @@ export const checks = [
   ['a syntax error gets a lint marker on its line; the fix brings a new frame', async (env) => {
     const { page, sid } = env;
     const source = (await http(env, 'GET', '/api/brdfs/ggx')).source;
-    const line = source.split('\n').findIndex((l) => l.includes('float a2 = a * a;')) + 1;
+    const line = source.split('\n').findIndex((l) => l.includes('float NoL = dot(N, L);')) + 1;
     assert.ok(line > 0, 'ggx.brdf has the line this test edits');
     const before = await settle(env, page, sid);
 
@@ -118,7 +118,7 @@ export const checks = [
     for (let i = 1; i < line; ++i) await page.keyboard.press('ArrowDown');
     await page.keyboard.press('End');
     await page.keyboard.press('ArrowLeft');                 // before the ';'
-    await page.keyboard.type(' * * 4.0');                   // a * a * * 4.0;  -> syntax error
+    await page.keyboard.type(' * * 4.0');                   // dot(N, L) * * 4.0;  -> syntax error
     const marker = page.locator('.cm-gutter-lint .cm-lint-marker-error').first();
     await marker.waitFor({ timeout: 20000 });
     // The marker's gutter row lines up with the line-number gutter's row of the same line.
@@ -137,7 +137,7 @@ export const checks = [
     await page.keyboard.press('ArrowLeft');
     await page.keyboard.press('ArrowLeft');
     await page.keyboard.press('ArrowLeft');                 // after the second '*'
-    await page.keyboard.press('Backspace');                 // a * a *  4.0;  -> valid, different D
+    await page.keyboard.press('Backspace');                 // dot(N, L) *  4.0;  -> valid, a different V term
     await env.waitForFrame(page, { before, threshold: 0.5 });
     await until('the marker to go', async () => (await page.locator('.cm-lint-marker-error').count()) === 0);
     const scene = await http(env, 'GET', `/api/sessions/${sid}/scene`);
