@@ -1725,7 +1725,9 @@ TEST_F(AuthQuotas, RacingRequestsNeverPassAQuota) {
   auto [uploads, bobUpload] =
       race([&](const std::string& who, int i) { return s.upload(who, smallPng(), std::to_string(i) + ".png"); });
   EXPECT_EQ(count(uploads, 201), 2) << "uploads at once past --quota-uploads 2";
-  EXPECT_EQ(count(uploads, 429), kRacers - 2);
+  // On a slow machine (a sanitizer build, a loaded CPU) the decode queue can fill before a racer
+  // reaches the quota, and it is told 503 busy instead: refused either way.
+  EXPECT_EQ(count(uploads, 429) + count(uploads, 503), kRacers - 2);
   EXPECT_EQ(bobUpload, 201);
   int kept = 0;
   for (const json& asset : s.get(a, "/api/assets").j()) kept += jv(asset, "owner", "") == "qx-alice";
