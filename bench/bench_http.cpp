@@ -309,10 +309,14 @@ int runHttpBench(const std::string& serverBinary, const std::string& sourceDir) 
   const int rounds = settings.rounds;
   std::vector<ServiceFigures> isolatedRuns, inProcessRuns, beforeRuns;
   for (int round = 0; round < rounds; ++round) {
+    // The baseline goes last in even rounds and first in odd ones, so that a machine's drift
+    // during a run (a neighbour's load, its CPU's clock) does not fall on one build only.
+    const bool baselineFirst = baseline && round % 2 == 1;
     ServiceFigures a, b, c;
-    if (!measureService(serverBinary, sourceDir, {}, a) ||
+    if ((baselineFirst && !measureService(baseline, baselineRoot, {}, c)) ||
+        !measureService(serverBinary, sourceDir, {}, a) ||
         !measureService(serverBinary, sourceDir, {"--in-process"}, b) ||
-        (baseline && !measureService(baseline, baselineRoot, {}, c)))
+        (baseline && !baselineFirst && !measureService(baseline, baselineRoot, {}, c)))
       return 1;
     isolatedRuns.push_back(a);
     inProcessRuns.push_back(b);
@@ -367,8 +371,10 @@ int runClassBench(const std::string& serverBinary, const std::string& sourceDir)
   std::vector<std::pair<std::string, ClassFigures>> runs;
   std::vector<std::vector<ClassFigures>> perMode(3);
   for (int round = 0; round < rounds; ++round) {
-    for (int mode = 0; mode < 3; ++mode) {
-      if (mode == 2 && !baseline) break;
+    for (int turn = 0; turn < 3; ++turn) {
+      // As above: the baseline build last in even rounds, first in odd ones.
+      const int mode = round % 2 == 1 ? (turn + 2) % 3 : turn;
+      if (mode == 2 && !baseline) continue;
       std::vector<std::string> args = mode == 2 ? std::vector<std::string>{} : classArgs;
       if (mode == 1) args.push_back("--in-process");
       ClassFigures f;
