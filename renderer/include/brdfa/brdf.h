@@ -51,6 +51,10 @@ struct BrdfDefinition {
   int sampleFirstLine = 0;
   std::vector<Diagnostic> warnings;  // e.g. an ignored `isFunc` section
   BrdfClaims claims;
+  // A measured BRDF (brdfa/measured.h): the registered measured asset whose table the program's
+  // `measuredMERL()` reads (set 1, binding 6). Empty for every other file. Not part of the
+  // program: every measured BRDF shares one compiled program and binds its own table.
+  std::string measuredTable;
 
   const BrdfParam* findParam(std::string_view name) const;
   bool hasSampler() const { return !sampleShader.empty(); }

@@ -84,4 +84,12 @@ Vec3 lookupMerlNearest(const MeasuredTable& table, const HalfDiff& hd);
 Vec3 lookupMerlInterpolated(const MeasuredTable& table, const HalfDiff& hd);
 Vec3 lookupMerlInterpolated(const MeasuredTable& table, const Vec3& L, const Vec3& V);
 
+// The BRDF file every measured table renders with: BRDF() is measuredMERL()
+// (shaders/lib/terms/measured_merl.glsl), which computes lookupMerlInterpolated on the device.
+// No parameters; claims reciprocity and non-negativity, which the lookup guarantees.
+std::string measuredBrdfText();
+// That file parsed, bound to the registered measured asset `tableName`
+// (BrdfDefinition::measuredTable).
+Result<BrdfDefinition> measuredBrdf(const std::string& tableName);
+
 }  // namespace brdfa

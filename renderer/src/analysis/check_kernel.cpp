@@ -27,6 +27,10 @@ Result<void> runCheckKernel(const CheckDevice& device, const BrdfDefinition& brd
   if (!kernel) return kernel.takeError();
   const ParamBlockLayout& layout = (*kernel)->params;
   VkContext& ctx = device.ctx;
+  std::shared_ptr<const GpuMeasured> measured;  // a measured BRDF's table, bound at set 1 binding 6
+  if (!brdf.measuredTable.empty()) {
+    BRDFA_TRY_ASSIGN(measured, device.assets.measured(brdf.measuredTable));
+  }
   auto output = Buffer::create(ctx, VkDeviceSize(outputVec4s) * 16, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, true);
   if (!output) return output.takeError();
   auto params = Buffer::create(ctx, layout.size, VK_BUFFER_USAGE_UNIFORM_BUFFER_BIT, true);
@@ -47,7 +51,7 @@ Result<void> runCheckKernel(const CheckDevice& device, const BrdfDefinition& brd
   // Set 0 carries the output in the accumulator binding (3); set 1 the parameter block.
   PoolOwner res;
   res.device = ctx.device();
-  VkDescriptorPoolSize sizes[4] = {{VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 7},
+  VkDescriptorPoolSize sizes[4] = {{VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 8},
                                    {VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, 5},
                                    {VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, 2},
                                    {VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER, 1}};
@@ -87,6 +91,7 @@ Result<void> runCheckKernel(const CheckDevice& device, const BrdfDefinition& brd
                       VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, nullptr, &paramInfo, nullptr});
   vkUpdateDescriptorSets(ctx.device(), static_cast<uint32_t>(writes.size()), writes.data(), 0, nullptr);
   device.assets.writeDefaultTextures(sets[1]);  // textures read as white, the neutral value of docs/design.md
+  device.assets.writeMeasured(sets[1], measured.get());
 
   for (const auto& setting : settings) {
     std::vector<uint8_t> packed = layout.pack(brdf, setting);

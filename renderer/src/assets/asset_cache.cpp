@@ -8,6 +8,8 @@
 #include <sstream>
 #include <string_view>
 
+#include "brdfa/measured.h"
+
 #include "assets/environment_preview.h"
 #include "assets/environment_sampling.h"
 #include "assets/obj_loader.h"
@@ -29,8 +31,9 @@ Result<Buffer> deviceBufferWith(VkContext& ctx, const void* bytes, VkDeviceSize 
   if (!cb) return cb.takeError();
   VkBufferCopy region{0, 0, size};
   vkCmdCopyBuffer(*cb, staging->handle(), buffer->handle(), 1, &region);
-  memoryBarrier(*cb, VK_PIPELINE_STAGE_TRANSFER_BIT, VK_ACCESS_TRANSFER_WRITE_BIT, VK_PIPELINE_STAGE_VERTEX_INPUT_BIT,
-                VK_ACCESS_VERTEX_ATTRIBUTE_READ_BIT | VK_ACCESS_INDEX_READ_BIT);
+  memoryBarrier(*cb, VK_PIPELINE_STAGE_TRANSFER_BIT, VK_ACCESS_TRANSFER_WRITE_BIT,
+                VK_PIPELINE_STAGE_VERTEX_INPUT_BIT | VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT,
+                VK_ACCESS_VERTEX_ATTRIBUTE_READ_BIT | VK_ACCESS_INDEX_READ_BIT | VK_ACCESS_SHADER_READ_BIT);
   BRDFA_TRY(cmd->submitAndWait());
   return buffer;
 }
@@ -71,6 +74,8 @@ uint64_t hostBytes(const MeshData& m) { return m.vertices.size() * sizeof(Vertex
 uint64_t deviceBytes(const MeshData& m) { return hostBytes(m); }
 uint64_t hostBytes(const TextureData& t) { return t.rgba8.size(); }
 uint64_t deviceBytes(const TextureData& t) { return uint64_t(t.width) * t.height * 4; }
+uint64_t hostBytes(const MeasuredTable& t) { return t.bytes(); }
+uint64_t deviceBytes(const MeasuredTable& t) { return t.bytes(); }
 uint64_t hostBytes(const EnvironmentData& e) { return e.texels.size() * sizeof(float); }
 uint64_t deviceBytes(const EnvironmentData& e) {
   const uint64_t cube = uint64_t(e.faceSize) * e.faceSize * 6 * 4 * sizeof(uint16_t);  // RGBA16F
@@ -106,6 +111,7 @@ AssetCache::AssetCache(VkContext& ctx, MemoryLedger& ledger, CacheShrinker shrin
     : ctx_(ctx), ledger_(ledger), shrinker_(std::move(shrinker)) {}
 
 AssetCache::~AssetCache() {
+  pinnedMeasured_.clear();
   environments_.clear();
   meshes_.clear();
   textures_.clear();
@@ -133,25 +139,48 @@ Result<void> AssetCache::init() {
   whiteTexture_ = std::move(image.value());
   const uint32_t texel = 0xffffffffu;
   BRDFA_TRY(uploadImage(ctx_, whiteTexture_, &texel, sizeof texel));
+
+  // Far shorter than a table: a measured program bound to it reads nothing (measured_merl.glsl).
+  const float none[4] = {-1, -1, -1, -1};
+  auto table = deviceBufferWith(ctx_, none, sizeof none, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT);
+  if (!table) return table.takeError();
+  noMeasuredTable_ = std::move(table.value());
   return {};
 }
 
 Result<void> AssetCache::registerAsset(const std::string& name, AssetKind kind, const std::string& path) {
   if (name.empty()) return makeError(ErrorCode::InvalidArgument, "an asset needs a name");
-  std::vector<std::string> builtins = kind == AssetKind::Mesh      ? builtinMeshNames()
-                                      : kind == AssetKind::Texture ? builtinTextureNames()
-                                                                   : builtinEnvironmentNames();
+  std::vector<std::string> builtins = kind == AssetKind::Mesh          ? builtinMeshNames()
+                                      : kind == AssetKind::Texture     ? builtinTextureNames()
+                                      : kind == AssetKind::Environment ? builtinEnvironmentNames()
+                                                                       : std::vector<std::string>{};
   if (std::find(builtins.begin(), builtins.end(), name) != builtins.end())
     return makeError(ErrorCode::InvalidArgument, "'" + name + "' is a built-in " + assetKindName(kind) + " name");
-  std::lock_guard<std::mutex> lock(assetMutex_);
-  registered_[{kind, name}] = path;
-  // Later scenes load the new file; views already holding the old one keep it.
-  if (kind == AssetKind::Mesh) uploadedMeshes_.erase(name);
-  if (kind == AssetKind::Environment) uploadedEnvironments_.erase(name);
-  if (kind == AssetKind::Texture) {
-    uploadedTextures_.erase(name + "|srgb");
-    uploadedTextures_.erase(name + "|linear");
+  {
+    std::lock_guard<std::mutex> lock(assetMutex_);
+    registered_[{kind, name}] = path;
+    // Later scenes load the new file; views already holding the old one keep it.
+    if (kind == AssetKind::Mesh) uploadedMeshes_.erase(name);
+    if (kind == AssetKind::Environment) uploadedEnvironments_.erase(name);
+    if (kind == AssetKind::Texture) {
+      uploadedTextures_.erase(name + "|srgb");
+      uploadedTextures_.erase(name + "|linear");
+    }
+    if (kind == AssetKind::Measured) {
+      uploadedMeasured_.erase(name);
+      pinnedMeasured_.erase(name);
+    }
   }
+  if (kind != AssetKind::Measured) return {};
+  // A measured table is loaded now and kept: its memory is taken when it is registered, so a
+  // table the budget cannot hold is refused at its upload (OverBudget), not in a later scene.
+  auto table = measured(name);
+  std::lock_guard<std::mutex> lock(assetMutex_);
+  if (!table) {
+    registered_.erase({kind, name});
+    return table.takeError();
+  }
+  pinnedMeasured_[name] = table.value();
   return {};
 }
 
@@ -314,6 +343,31 @@ Result<std::shared_ptr<const GpuTexture>> AssetCache::texture(const std::string&
       [&] { return makeBuiltinTexture(name); },
       [&](std::string_view bytes) { return decodeTexture(bytes, kUnlimited); },
       [&](const TextureData& data) { return uploadTexture(name, srgb, data); });
+}
+
+Result<std::shared_ptr<GpuMeasured>> AssetCache::uploadMeasured(const std::string& name, const MeasuredTable& data) {
+  auto buffer = deviceBufferWith(ctx_, data.rgb.data(), data.bytes(), VK_BUFFER_USAGE_STORAGE_BUFFER_BIT);
+  if (!buffer) return buffer.takeError();
+  auto gpu = std::make_shared<GpuMeasured>();
+  gpu->name = name;
+  gpu->table = std::move(buffer.value());
+  return gpu;
+}
+
+Result<std::shared_ptr<const GpuMeasured>> AssetCache::measured(const std::string& name) {
+  std::lock_guard<std::mutex> lock(assetMutex_);
+  std::map<std::string, std::shared_ptr<const GpuMeasured>> noBuiltins;
+  return findOrLoad(
+      AssetKind::Measured, name, name, noBuiltins, uploadedMeasured_, [] { return std::optional<MeasuredTable>(); },
+      [](std::string_view bytes) { return readMerl(bytes); },
+      [&](const MeasuredTable& data) { return uploadMeasured(name, data); });
+}
+
+void AssetCache::writeMeasured(VkDescriptorSet objectSet, const GpuMeasured* table) const {
+  VkDescriptorBufferInfo info{table ? table->table.handle() : noMeasuredTable_.handle(), 0, VK_WHOLE_SIZE};
+  VkWriteDescriptorSet w{VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET, nullptr, objectSet, 6,      0, 1,
+                         VK_DESCRIPTOR_TYPE_STORAGE_BUFFER,      nullptr, &info,     nullptr};
+  vkUpdateDescriptorSets(ctx_.device(), 1, &w, 0, nullptr);
 }
 
 std::vector<std::string> AssetCache::environmentNames() const {

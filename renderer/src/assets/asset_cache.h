@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "brdfa/assets.h"
+#include "brdfa/measured.h"
 #include "brdfa/renderer.h"
 
 #include "assets/environment_maps.h"
@@ -45,6 +46,8 @@ class AssetCache {
   Result<std::shared_ptr<const GpuEnvironment>> environment(const std::string& name);
   Result<std::shared_ptr<const GpuMesh>> mesh(const std::string& name);
   Result<std::shared_ptr<const GpuTexture>> texture(const std::string& name, bool srgb);
+  // A registered measured table (kept from its registration until it is registered again).
+  Result<std::shared_ptr<const GpuMeasured>> measured(const std::string& name);
 
   VkSampler environmentSampler() const { return envSampler_; }
   // Binds `textures` (null entries: white) to set 1 bindings 2..5 of `objectSet`.
@@ -53,6 +56,9 @@ class AssetCache {
   // Binds the 1x1 white texture to the four texture slots (set 1, bindings 2..5) of `objectSet`:
   // every slot of a bound set must hold a valid image (see analysis/check_kernel.cpp).
   void writeDefaultTextures(VkDescriptorSet objectSet) const;
+  // Binds `table` (null: a stand-in shorter than any table) to set 1 binding 6 of `objectSet`;
+  // every object set gets one, measured or not.
+  void writeMeasured(VkDescriptorSet objectSet, const GpuMeasured* table) const;
 
   // Part of the memory budget's shrink: drops built-in assets that nothing but the cache holds
   // until `freed` reaches `needed`, adding their names to `names`. The asset lock is taken only
@@ -72,6 +78,7 @@ class AssetCache {
   Result<std::shared_ptr<GpuMesh>> uploadMesh(const std::string& name, const MeshData& data);
   Result<std::shared_ptr<GpuEnvironment>> uploadEnvironment(const std::string& name, const EnvironmentData& data);
   Result<std::shared_ptr<GpuTexture>> uploadTexture(const std::string& name, bool srgb, const TextureData& data);
+  Result<std::shared_ptr<GpuMeasured>> uploadMeasured(const std::string& name, const MeasuredTable& data);
 
   VkContext& ctx_;
   MemoryLedger& ledger_;
@@ -79,6 +86,7 @@ class AssetCache {
   VkSampler envSampler_ = VK_NULL_HANDLE;
   VkSampler textureSampler_ = VK_NULL_HANDLE;  // iTexture0..3: linear, repeating
   Image whiteTexture_;                         // 1x1 RGBA8 (1, 1, 1, 1): an unbound texture slot
+  Buffer noMeasuredTable_;                     // binding 6 of an object that is not measured
 
   mutable std::mutex assetMutex_;
   std::map<std::pair<AssetKind, std::string>, std::string> registered_;  // (kind, name) -> file path
@@ -88,6 +96,8 @@ class AssetCache {
   std::map<std::string, std::weak_ptr<const GpuEnvironment>> uploadedEnvironments_;
   std::map<std::string, std::weak_ptr<const GpuMesh>> uploadedMeshes_;
   std::map<std::string, std::weak_ptr<const GpuTexture>> uploadedTextures_;
+  std::map<std::string, std::weak_ptr<const GpuMeasured>> uploadedMeasured_;
+  std::map<std::string, std::shared_ptr<const GpuMeasured>> pinnedMeasured_;  // every registered table
 };
 
 }  // namespace brdfa

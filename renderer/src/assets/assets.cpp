@@ -1,5 +1,7 @@
 #include "brdfa/assets.h"
 
+#include "brdfa/measured.h"
+
 #include "assets/image_decode.h"
 #include "assets/obj_loader.h"
 
@@ -9,12 +11,13 @@ const char* assetKindName(AssetKind kind) {
   switch (kind) {
     case AssetKind::Texture: return "texture";
     case AssetKind::Environment: return "environment";
+    case AssetKind::Measured: return "measured";
     default: return "mesh";
   }
 }
 
 bool assetKindFromName(std::string_view name, AssetKind& kind) {
-  for (AssetKind k : {AssetKind::Mesh, AssetKind::Texture, AssetKind::Environment})
+  for (AssetKind k : {AssetKind::Mesh, AssetKind::Texture, AssetKind::Environment, AssetKind::Measured})
     if (name == assetKindName(k)) {
       kind = k;
       return true;
@@ -28,6 +31,7 @@ const char* assetFormatName(AssetFormat format) {
     case AssetFormat::Jpeg: return "jpeg";
     case AssetFormat::Hdr: return "hdr";
     case AssetFormat::Exr: return "exr";
+    case AssetFormat::Merl: return "merl";
     default: return "obj";
   }
 }
@@ -74,6 +78,7 @@ std::optional<AssetFormat> sniffAssetFormat(std::string_view bytes) {
   if (startsWith(bytes, "\xFF\xD8\xFF")) return AssetFormat::Jpeg;
   if (startsWith(bytes, "#?RADIANCE") || startsWith(bytes, "#?RGBE")) return AssetFormat::Hdr;
   if (startsWith(bytes, std::string_view("\x76\x2F\x31\x01", 4))) return AssetFormat::Exr;
+  if (hasMerlHeader(bytes)) return AssetFormat::Merl;  // int32 90, 90, 180: never text, never an image
   if (looksLikeObj(bytes)) return AssetFormat::Obj;
   return std::nullopt;
 }
@@ -87,6 +92,7 @@ const char* formatDescription(AssetFormat format) {
     case AssetFormat::Jpeg: return "a JPEG image";
     case AssetFormat::Hdr: return "a Radiance HDR image";
     case AssetFormat::Exr: return "an OpenEXR image";
+    case AssetFormat::Merl: return "a MERL measured BRDF table";
     default: return "an OBJ mesh";
   }
 }
@@ -96,6 +102,7 @@ const char* kindDescription(AssetKind kind) {
   switch (kind) {
     case AssetKind::Texture: return "a texture (PNG or JPEG)";
     case AssetKind::Environment: return "an environment (equirectangular HDR or EXR, or a PNG or JPEG cross cube map)";
+    case AssetKind::Measured: return "a measured BRDF (a MERL .binary table)";
     default: return "a mesh (OBJ)";
   }
 }
@@ -104,7 +111,8 @@ bool kindAccepts(AssetKind kind, AssetFormat format) {
   switch (kind) {
     case AssetKind::Mesh: return format == AssetFormat::Obj;
     case AssetKind::Texture: return format == AssetFormat::Png || format == AssetFormat::Jpeg;
-    default: return format != AssetFormat::Obj;
+    case AssetKind::Measured: return format == AssetFormat::Merl;
+    default: return format != AssetFormat::Obj && format != AssetFormat::Merl;
   }
 }
 
@@ -125,6 +133,16 @@ Result<AssetInfo> inspectTexture(std::string_view bytes, AssetFormat format, con
   info.format = format;
   info.width = int(texture->width);
   info.height = int(texture->height);
+  return info;
+}
+
+Result<AssetInfo> inspectMeasured(std::string_view bytes) {
+  auto table = readMerl(bytes);
+  if (!table) return table.takeError();
+  AssetInfo info;
+  info.kind = AssetKind::Measured;
+  info.format = AssetFormat::Merl;
+  info.measuredBins = table->validBins;
   return info;
 }
 
@@ -150,14 +168,16 @@ Result<AssetInfo> inspectAsset(std::string_view bytes, AssetKind kind, const Ass
                                                      " bytes");
   auto format = sniffAssetFormat(bytes);
   if (!format)
-    return makeError(ErrorCode::InvalidArgument, std::string("unrecognised file: expected ") + kindDescription(kind) +
-                                                     ", but the content matches none of OBJ, PNG, JPEG, HDR or EXR");
+    return makeError(ErrorCode::InvalidArgument,
+                     std::string("unrecognised file: expected ") + kindDescription(kind) +
+                         ", but the content matches none of OBJ, PNG, JPEG, HDR, EXR or MERL");
   if (!kindAccepts(kind, *format))
     return makeError(ErrorCode::InvalidArgument, std::string("mislabelled: the file is ") + formatDescription(*format) +
                                                      ", not " + kindDescription(kind));
   switch (kind) {
     case AssetKind::Mesh: return inspectMesh(bytes, limits);
     case AssetKind::Texture: return inspectTexture(bytes, *format, limits);
+    case AssetKind::Measured: return inspectMeasured(bytes);
     default: return inspectEnvironment(bytes, limits);
   }
 }

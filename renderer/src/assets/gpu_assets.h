@@ -48,4 +48,12 @@ struct GpuTexture {
   MemoryReservation memory;  // its share of the renderer's memory budget
 };
 
+// A measured BRDF's table (brdfa/measured.h's MeasuredTable: 3 floats per bin) as the storage
+// buffer a measured program reads at set 1, binding 6.
+struct GpuMeasured {
+  std::string name;
+  Buffer table;              // device-local
+  MemoryReservation memory;  // its share of the renderer's memory budget
+};
+
 }  // namespace brdfa

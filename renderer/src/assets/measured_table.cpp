@@ -201,4 +201,24 @@ Vec3 lookupMerlInterpolated(const MeasuredTable& table, const Vec3& L, const Vec
   return lookupMerlInterpolated(table, halfDiffFromDirections(L, V));
 }
 
+std::string measuredBrdfText() {
+  return "analytic\n"
+         "# A measured BRDF: a MERL table (brdfa/measured.h), looked up by trilinear interpolation\n"
+         "# between bin centres in Rusinkiewicz's half/difference angles.\n"
+         "# claims: reciprocity, non-negativity\n"
+         "::begin parameters\n"
+         "::end parameters\n"
+         "::begin shader\n"
+         "#include \"terms/measured_merl.glsl\"\n"
+         "\n"
+         "vec3 BRDF(vec3 L, vec3 V, vec3 N, vec3 X, vec3 Y) { return measuredMERL(L, V, N, X, Y); }\n"
+         "::end shader\n";
+}
+
+Result<BrdfDefinition> measuredBrdf(const std::string& tableName) {
+  BRDFA_TRY_ASSIGN(BrdfDefinition brdf, parseBrdf(measuredBrdfText()));
+  brdf.measuredTable = tableName;
+  return brdf;
+}
+
 }  // namespace brdfa

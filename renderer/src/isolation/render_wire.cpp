@@ -86,7 +86,8 @@ json toJson(const BrdfDefinition& brdf) {
               {"sampleShader", brdf.sampleShader},
               {"sampleFirstLine", brdf.sampleFirstLine},
               {"warnings", brdf.warnings},
-              {"claims", brdf.claims}};
+              {"claims", brdf.claims},
+              {"measuredTable", brdf.measuredTable}};
 }
 
 BrdfDefinition brdfFromJson(const json& j) {
@@ -99,6 +100,7 @@ BrdfDefinition brdfFromJson(const json& j) {
   j.at("sampleFirstLine").get_to(b.sampleFirstLine);
   j.at("warnings").get_to(b.warnings);
   j.at("claims").get_to(b.claims);
+  j.at("measuredTable").get_to(b.measuredTable);
   return b;
 }
 
@@ -106,6 +108,7 @@ std::string programKey(const BrdfDefinition& brdf) {
   // Line numbers change the #line directives, hence the SPIR-V; warnings do not matter.
   json j = toJson(brdf);
   j.erase("warnings");
+  j.erase("measuredTable");  // a binding, not code: every measured BRDF runs one program
   char text[24];
   std::snprintf(text, sizeof text, "%016zx", std::hash<std::string>{}(j.dump()));
   return text;

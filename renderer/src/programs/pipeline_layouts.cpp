@@ -45,14 +45,16 @@ Result<void> PipelineLayouts::create() {
   li.pBindings = view.data();
   BRDFA_VK_TRY(vkCreateDescriptorSetLayout(d, &li, nullptr, &viewSetLayout_));
 
-  // Set 1: one object's BRDF parameters (shading), transform (raster) and textures
-  // iTexture0..3 (shading; lib/brdf_inputs.glsl).
-  std::array<VkDescriptorSetLayoutBinding, 6> object{};
+  // Set 1: one object's BRDF parameters (shading), transform (raster), textures
+  // iTexture0..3 (shading; lib/brdf_inputs.glsl) and measured table (shading;
+  // lib/terms/measured_merl.glsl).
+  std::array<VkDescriptorSetLayoutBinding, 7> object{};
   object[0] = {0, VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, 1, VK_SHADER_STAGE_COMPUTE_BIT, nullptr};
   object[1] = {1, VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, 1, VK_SHADER_STAGE_VERTEX_BIT | VK_SHADER_STAGE_FRAGMENT_BIT,
                nullptr};
   for (uint32_t t = 0; t < 4; ++t)
     object[2 + t] = {2 + t, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, 1, VK_SHADER_STAGE_COMPUTE_BIT, nullptr};
+  object[6] = {6, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 1, VK_SHADER_STAGE_COMPUTE_BIT, nullptr};
   li.bindingCount = static_cast<uint32_t>(object.size());
   li.pBindings = object.data();
   // The slots a compute program may declare: what a BRDF's text adds beyond them is refused.

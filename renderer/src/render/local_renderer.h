@@ -85,6 +85,10 @@ class LocalRenderer final : public Renderer, public std::enable_shared_from_this
                      const std::shared_ptr<const GpuTexture> (&textures)[kMaxTextures]) const {
     assets_->writeTextures(objectSet, textures);
   }
+  void writeMeasured(VkDescriptorSet objectSet, const GpuMeasured* table) const {
+    assets_->writeMeasured(objectSet, table);
+  }
+  Result<std::shared_ptr<const GpuMeasured>> measured(const std::string& name) { return assets_->measured(name); }
   bool hostResolve() const { return hostResolve_; }
   bool profilePasses() const { return profilePasses_; }  // RendererOptions::profilePasses
 

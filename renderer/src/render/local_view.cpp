@@ -88,7 +88,7 @@ Result<void> LocalView::init() {
   cmd_ = std::move(cmd.value());
 
   // New objects are built before the old ones are released, hence room for two scenes' worth.
-  VkDescriptorPoolSize sizes[4] = {{VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 7 * kMaxJitter},
+  VkDescriptorPoolSize sizes[4] = {{VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 7 * kMaxJitter + 2 * kMaxObjects},
                                    {VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, kMaxJitter + 8 * kMaxObjects},
                                    {VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, 4 * kMaxObjects},
                                    {VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER, 4 * kMaxJitter}};
@@ -353,6 +353,15 @@ Result<std::vector<LocalView::ObjectState>> LocalView::buildObjects(
       return fail(std::move(e));
     }
     o.mesh = mesh.value();
+    if (!so.brdf->measuredTable.empty()) {
+      auto table = r_->measured(so.brdf->measuredTable);
+      if (!table) {
+        Error e = table.takeError();
+        e.field = at + ".brdf";
+        return fail(std::move(e));
+      }
+      o.measured = table.value();
+    }
     for (size_t t = 0; t < so.textures.size() && t < static_cast<size_t>(kMaxTextures); ++t) {
       auto texture = r_->texture(so.textures[t].name, so.textures[t].srgb);
       if (!texture) {
@@ -399,6 +408,7 @@ Result<std::vector<LocalView::ObjectState>> LocalView::buildObjects(
     }
     vkUpdateDescriptorSets(ctx.device(), 2, w, 0, nullptr);
     r_->writeTextures(o.set, o.textures);
+    r_->writeMeasured(o.set, o.measured.get());
     out.push_back(std::move(o));
   }
   return out;

@@ -44,6 +44,7 @@ class LocalView final : public RenderView {
     ShadeVariant variant;  // what the kernel runs, for the stats' estimator and warnings
     std::shared_ptr<const GpuMesh> mesh;
     std::shared_ptr<const GpuTexture> textures[kMaxTextures];  // null: white
+    std::shared_ptr<const GpuMeasured> measured;               // a measured BRDF's table, else null
     Buffer params;                                             // std140 BrdfParams
     Buffer transform;                                          // ObjectUniform
     VkDescriptorSet set = VK_NULL_HANDLE;
