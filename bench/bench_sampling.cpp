@@ -8,13 +8,16 @@
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
+#include <fstream>
 #include <map>
 #include <memory>
 #include <vector>
 
+#include "brdfa/measured.h"
 #include "brdfa/renderer.h"
 
 #include "bench_util.h"
+#include "merl_files.h"
 
 namespace brdfa::bench {
 
@@ -26,8 +29,9 @@ constexpr double kBudgetMs = 1000;   // render time per strategy and round
 constexpr double kReferenceMs = 6000;
 
 struct BenchScene {
-  std::string label, brdf, environment;
+  std::string label, brdf, environment;  // brdf: a built-in file, or a registered measured table
   std::map<std::string, Vec3> params;
+  bool measured = false;
 };
 
 double luminance(const float* rgb) { return 0.2126 * rgb[0] + 0.7152 * rgb[1] + 0.0722 * rgb[2]; }
@@ -41,7 +45,7 @@ Scene sceneFor(const BenchScene& b, const std::string& sourceDir, SamplingMode m
   s.render.maxSamples = kMaxTotalSamples;
   s.render.sampling = mode;
   SceneObject o;
-  auto def = parseBrdf(readText(sourceDir + "/shaders/brdfs/" + b.brdf + ".brdf"));
+  auto def = b.measured ? measuredBrdf(b.brdf) : parseBrdf(readText(sourceDir + "/shaders/brdfs/" + b.brdf + ".brdf"));
   o.brdf = std::make_shared<BrdfDefinition>(def.value());
   o.params = b.params;
   s.objects.push_back(o);
@@ -87,6 +91,15 @@ int runSamplingBench(const std::string& sourceDir, int rounds, const std::string
                   {"GGX 0.2, blender_courtyard", "ggx", "blender_courtyard", {{"roughness", {0.2f, 0.2f, 0.2f}}}});
   else
     std::printf("(blender-data is not installed: the blender world row is left out)\n");
+  // Measured tables made from GGX (tests/support/merl_files.h), sampled by their fitted lobes.
+  for (auto [alpha, name] : {std::pair{0.2, "merl_bench_ggx_0_2"}, std::pair{0.05, "merl_bench_ggx_0_05"}}) {
+    const std::string table = (std::filesystem::temp_directory_path() / (std::string(name) + ".binary")).string();
+    std::ofstream(table, std::ios::binary) << testsupport::ggxMerl(alpha, {0.95, 0.64, 0.54});
+    const bool registered = bool((*renderer)->registerAsset(name, AssetKind::Measured, table));
+    std::filesystem::remove(table);
+    if (!registered) return 1;
+    scenes.push_back({"measured GGX " + std::string(alpha == 0.2 ? "0.2" : "0.05") + ", sky", name, "sky", {}, true});
+  }
   if (!sceneFilter.empty())
     scenes.erase(std::remove_if(scenes.begin(), scenes.end(),
                                 [&](const BenchScene& b) { return b.label.find(sceneFilter) == std::string::npos; }),

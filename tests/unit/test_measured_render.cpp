@@ -51,6 +51,22 @@ class MeasuredRender : public DeviceTest {
     return brdf.ok() ? std::make_shared<BrdfDefinition>(brdf.value()) : nullptr;
   }
 
+  // `s` (one object, hidden environment) rendered to its end with `analytic` and with the
+  // measured table `table` as the object's BRDF: equal samples of the same sequences.
+  static std::pair<Frame, Frame> renderBoth(Scene s, std::shared_ptr<const BrdfDefinition> analytic,
+                                            const std::string& table) {
+    SceneObject o;
+    o.brdf = std::move(analytic);
+    s.environment.visible = false;
+    s.objects = {o};
+    auto analyticView = viewWithScene(*renderer_, s);
+    s.objects[0].brdf = measured(table);
+    auto measuredView = viewWithScene(*renderer_, s);
+    EXPECT_TRUE(analyticView && measuredView);
+    if (!analyticView || !measuredView) return {};
+    return {renderUntilDone(*analyticView), renderUntilDone(*measuredView)};
+  }
+
   static inline std::filesystem::path dir_;
   static inline std::string ggxFile_, lambertFile_;
 };
@@ -78,6 +94,18 @@ TEST_F(MeasuredRender, DeviceLookupIsTheHostLookup) {
     const Vec3 host = lookupMerlInterpolated(*table, pairs[i].light, pairs[i].view);
     for (int c = 0; c < 3; ++c)
       ASSERT_NEAR((*values)[i][c], host[c], 2e-3 * std::max(1.0f, host[c])) << "pair " << i << " channel " << c;
+  }
+}
+
+// The table's sampler (a fitted GGX lobe mixed with the cosine) against its own pdf and BRDF():
+// the renderer's chi-square and weight checks at every normal and view they test.
+TEST_F(MeasuredRender, SamplerPassesTheSamplerChecks) {
+  for (const char* table : {"merl_ggx", "merl_white"}) {
+    auto report = renderer_->checkSampler(*measured(table));
+    ASSERT_TRUE(report.ok()) << report.error().message;
+    EXPECT_TRUE(report->chi2Run) << table;
+    EXPECT_TRUE(report->passed()) << table << ": " << report->worst << " " << report->chi2Failure;
+    EXPECT_GT(report->minChi2PValue, report->chi2Threshold) << table;
   }
 }
 
@@ -116,18 +144,10 @@ TEST_F(MeasuredRender, PolarSliceFollowsAnalyticGgxWithinTheTablesInterpolationE
 TEST_F(MeasuredRender, WhiteLambertTableRendersAsOneInTheFurnace) {
   Scene s;
   s.environment.name = "furnace";
-  s.environment.visible = false;
   s.render.width = s.render.height = 64;
   s.render.maxSamples = 16;
   s.render.sampling = SamplingMode::Cosine;
-  SceneObject o;
-  o.brdf = inlineBrdf(kWhiteLambert);
-  s.objects.push_back(o);
-  auto analyticView = viewWithScene(*renderer_, s);
-  s.objects[0].brdf = measured("merl_white");
-  auto measuredView = viewWithScene(*renderer_, s);
-  ASSERT_TRUE(analyticView && measuredView);
-  const Frame a = renderUntilDone(*analyticView), m = renderUntilDone(*measuredView);
+  const auto [a, m] = renderBoth(s, inlineBrdf(kWhiteLambert), "merl_white");
   ASSERT_EQ(a.rgba32f.size(), m.rgba32f.size());
   size_t ones = 0;
   for (size_t i = 0; i < a.rgba32f.size(); ++i) {
@@ -144,19 +164,11 @@ TEST_F(MeasuredRender, WhiteLambertTableRendersAsOneInTheFurnace) {
 TEST_F(MeasuredRender, MeasuredGgxImageIsTheAnalyticGgxImageWithin2PercentRelMse) {
   Scene s;
   s.environment.name = "sky";
-  s.environment.visible = false;
   s.render.width = s.render.height = 96;
   s.render.samplesPerFrame = 64;
   s.render.maxSamples = 256;
   s.render.sampling = SamplingMode::Environment;
-  SceneObject o;
-  o.brdf = builtin("ggx");
-  s.objects.push_back(o);
-  auto analyticView = viewWithScene(*renderer_, s);
-  s.objects[0].brdf = measured("merl_ggx");
-  auto measuredView = viewWithScene(*renderer_, s);
-  ASSERT_TRUE(analyticView && measuredView);
-  const Frame a = renderUntilDone(*analyticView), m = renderUntilDone(*measuredView);
+  const auto [a, m] = renderBoth(s, builtin("ggx"), "merl_ggx");
   ASSERT_EQ(a.rgba32f.size(), m.rgba32f.size());
   double sum = 0;
   size_t n = 0;
@@ -182,7 +194,8 @@ TEST_F(MeasuredRender, TableIsCountedInTheMemoryBudget) {
   const uint64_t before = renderer_->counters().memory.assets;
   const std::string file = writeFile("again.binary", testsupport::lambertMerl({0.5, 0.5, 0.5}));
   ASSERT_TRUE(renderer_->registerAsset("merl_counted", AssetKind::Measured, file).ok());
-  EXPECT_EQ(renderer_->counters().memory.assets, before + 3 * kMerlBins * sizeof(float));
+  // The table, and the sampling proposal's four floats after it.
+  EXPECT_EQ(renderer_->counters().memory.assets, before + 3 * kMerlBins * sizeof(float) + 16);
   EXPECT_EQ(renderer_->counters().memory.transfers, 0u);  // the file and staging are given back
 }
 

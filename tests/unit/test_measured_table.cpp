@@ -165,6 +165,28 @@ TEST(MeasuredTable, GgxTableFollowsTheAnalyticGgxWithinInterpolationError) {
   EXPECT_LT(relativeRmsAgainstGgx(0.05, 50000), 0.025);
 }
 
+TEST(MeasuredTable, LobeFitFindsTheGgxWidthAndLeavesADiffuseTableToTheCosine) {
+  for (double alpha : {0.05, 0.1, 0.3, 0.5}) {
+    auto read = readMerl(testsupport::ggxMerl(alpha, {0.9, 0.9, 0.9}));
+    ASSERT_TRUE(read) << read.error().message;
+    EXPECT_NEAR(read->lobeAlpha, alpha, 0.2 * alpha) << "alpha " << alpha;
+    EXPECT_GE(read->lobeWeight, 0.6f) << "alpha " << alpha;  // no diffuse floor: mostly the lobe
+  }
+  auto diffuse = readMerl(testsupport::lambertMerl({0.5, 0.5, 0.5}));
+  ASSERT_TRUE(diffuse);
+  EXPECT_FLOAT_EQ(diffuse->lobeWeight, 0.1f);
+  // GGX 0.2 (F0 0.5) over a Lambertian of albedo 0.5: about as much energy in each part.
+  auto mixed = readMerl(testsupport::merlFile([](const testsupport::Dir& L, const testsupport::Dir& V) {
+    if (L[2] <= 0 || V[2] <= 0) return Rgb{-1, -1, -1};
+    const Rgb s = testsupport::ggxValue(L, V, 0.2, {0.5, 0.5, 0.5});
+    return Rgb{s[0] + 0.5 / kPi, s[1] + 0.5 / kPi, s[2] + 0.5 / kPi};
+  }));
+  ASSERT_TRUE(mixed);
+  EXPECT_NEAR(mixed->lobeAlpha, 0.2, 0.05);
+  EXPECT_GT(mixed->lobeWeight, 0.25f);
+  EXPECT_LT(mixed->lobeWeight, 0.75f);
+}
+
 TEST(MeasuredTable, RefusesWrongSizesAndHeaders) {
   const std::string good = testsupport::lambertMerl({0.5, 0.5, 0.5});
   ASSERT_TRUE(readMerl(good));

@@ -41,6 +41,9 @@ size_t merlIndex(const MerlBin& bin);  // phi_d + 180 theta_d + 16200 theta_h
 struct MeasuredTable {
   std::vector<float> rgb;  // 3 * kMerlBins
   size_t validBins = 0;
+  // The sampling proposal fitMerlLobe chose: a GGX lobe of width lobeAlpha, drawn with
+  // probability lobeWeight, else the cosine.
+  float lobeAlpha = 0.3f, lobeWeight = 0.5f;
   bool valid(size_t bin) const { return rgb[3 * bin] >= 0.0f; }
   uint64_t bytes() const { return rgb.size() * sizeof(float); }
 };
@@ -53,6 +56,17 @@ bool hasMerlHeader(std::string_view bytes);
 // header, a NaN or infinite value (naming its bin and channel), or no bin with data at all.
 // Thread-safe; a 35 MB file takes a few tens of milliseconds.
 Result<MeasuredTable> readMerl(std::string_view bytes);
+
+// A proposal to importance-sample the table with: a GGX lobe of width alpha in [0.005, 1],
+// drawn with probability weight in [0.1, 0.9], else the cosine. From the green channel's profile
+// over theta_h at the smallest theta_d (phi_d averaged), read as a GGX D above a diffuse floor:
+// alpha from the profile's half-width above the floor (exact for a pure GGX D), the weight
+// from the two parts' energies (a narrow GGX lobe of peak f reflects about 4 pi alpha^2 f, the
+// floor pi f). Any proposal leaves the estimate unbiased: the mixture's pdf is exact.
+struct MerlLobe {
+  float alpha = 0.3f, weight = 0.5f;
+};
+MerlLobe fitMerlLobe(const MeasuredTable& table);
 
 // Writes `planar` (3 x kMerlBins stored values, R then G then B, MERL's scale not applied) as a
 // MERL file. For tests and examples: any values are written as given.

@@ -4,8 +4,8 @@
 #include <array>
 #include <cmath>
 #include <cstring>
+#include <filesystem>
 #include <fstream>
-#include <sstream>
 #include <string_view>
 
 #include "brdfa/measured.h"
@@ -19,10 +19,14 @@ namespace brdfa {
 
 namespace {
 
-Result<Buffer> deviceBufferWith(VkContext& ctx, const void* bytes, VkDeviceSize size, VkBufferUsageFlags usage) {
+// A device-local buffer holding `bytes`, then `tail` (tailSize bytes) after them.
+Result<Buffer> deviceBufferWith(VkContext& ctx, const void* bytes, VkDeviceSize headSize, VkBufferUsageFlags usage,
+                                const void* tail = nullptr, VkDeviceSize tailSize = 0) {
+  const VkDeviceSize size = headSize + tailSize;
   auto staging = Buffer::create(ctx, size, VK_BUFFER_USAGE_TRANSFER_SRC_BIT, true);
   if (!staging) return staging.takeError();
-  std::memcpy(staging->mapped(), bytes, size);
+  std::memcpy(staging->mapped(), bytes, headSize);
+  if (tailSize > 0) std::memcpy(static_cast<char*>(staging->mapped()) + headSize, tail, tailSize);
   auto buffer = Buffer::create(ctx, size, usage | VK_BUFFER_USAGE_TRANSFER_DST_BIT, false);
   if (!buffer) return buffer.takeError();
   auto cmd = CommandContext::create(ctx);
@@ -38,13 +42,15 @@ Result<Buffer> deviceBufferWith(VkContext& ctx, const void* bytes, VkDeviceSize 
   return buffer;
 }
 
-Result<std::string> readWholeFile(const std::string& path) {
+// Reads `size` bytes (the file's size, as reserved) into one string: no second copy.
+Result<std::string> readWholeFile(const std::string& path, uint64_t size) {
   std::ifstream in(path, std::ios::binary);
   if (!in) return makeError(ErrorCode::NotFound, "asset file is missing: " + path);
-  std::ostringstream text;
-  text << in.rdbuf();
-  if (!in.good() && !in.eof()) return makeError(ErrorCode::Internal, "cannot read asset file " + path);
-  return text.str();
+  std::string bytes(size, '\0');
+  in.read(bytes.data(), static_cast<std::streamsize>(size));
+  if (static_cast<uint64_t>(in.gcount()) != size)
+    return makeError(ErrorCode::Internal, "cannot read asset file " + path);
+  return bytes;
 }
 
 // A registered asset's file failed to decode although it passed inspectAsset when stored
@@ -74,8 +80,10 @@ uint64_t hostBytes(const MeshData& m) { return m.vertices.size() * sizeof(Vertex
 uint64_t deviceBytes(const MeshData& m) { return hostBytes(m); }
 uint64_t hostBytes(const TextureData& t) { return t.rgba8.size(); }
 uint64_t deviceBytes(const TextureData& t) { return uint64_t(t.width) * t.height * 4; }
+// The device copy carries the sampling proposal after the table (measured_merl.glsl).
+constexpr size_t kMeasuredTailFloats = 4;
 uint64_t hostBytes(const MeasuredTable& t) { return t.bytes(); }
-uint64_t deviceBytes(const MeasuredTable& t) { return t.bytes(); }
+uint64_t deviceBytes(const MeasuredTable& t) { return t.bytes() + kMeasuredTailFloats * sizeof(float); }
 uint64_t hostBytes(const EnvironmentData& e) { return e.texels.size() * sizeof(float); }
 uint64_t deviceBytes(const EnvironmentData& e) {
   const uint64_t cube = uint64_t(e.faceSize) * e.faceSize * 6 * 4 * sizeof(uint16_t);  // RGBA16F
@@ -221,11 +229,15 @@ Result<std::shared_ptr<const Gpu>> AssetCache::findOrLoad(AssetKind kind, const 
   }
   auto path = registeredPath(kind, name);
   if (!path) return path.takeError();
-  auto bytes = readWholeFile(*path);
+  // The file and what it decodes to are in flight until the upload ends: reserved before the
+  // file is read, so a file the budget cannot hold is refused before it takes the memory.
+  std::error_code ec;
+  const uint64_t fileBytes = std::filesystem::file_size(*path, ec);
+  if (ec) return assetError(makeError(ErrorCode::NotFound, "asset file is missing: " + *path), kind, name);
+  BRDFA_TRY(ledger_.reserve(MemoryUse::Transfers, fileBytes, what, shrinker_({.assets = true})));
+  MemoryReservation file(&ledger_, MemoryUse::Transfers, fileBytes);
+  auto bytes = readWholeFile(*path, fileBytes);
   if (!bytes) return assetError(bytes.takeError(), kind, name);
-  // The file and what it decodes to are in flight until the upload ends.
-  BRDFA_TRY(ledger_.reserve(MemoryUse::Transfers, bytes->size(), what, shrinker_({.assets = true})));
-  MemoryReservation file(&ledger_, MemoryUse::Transfers, bytes->size());
   auto data = decode(std::string_view(*bytes));
   if (!data) return assetError(data.takeError(), kind, name);
   auto gpu = place(*data);
@@ -346,7 +358,9 @@ Result<std::shared_ptr<const GpuTexture>> AssetCache::texture(const std::string&
 }
 
 Result<std::shared_ptr<GpuMeasured>> AssetCache::uploadMeasured(const std::string& name, const MeasuredTable& data) {
-  auto buffer = deviceBufferWith(ctx_, data.rgb.data(), data.bytes(), VK_BUFFER_USAGE_STORAGE_BUFFER_BIT);
+  const float tail[kMeasuredTailFloats] = {data.lobeAlpha, data.lobeWeight, 0.0f, 0.0f};
+  auto buffer =
+      deviceBufferWith(ctx_, data.rgb.data(), data.bytes(), VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, tail, sizeof tail);
   if (!buffer) return buffer.takeError();
   auto gpu = std::make_shared<GpuMeasured>();
   gpu->name = name;

@@ -101,7 +101,51 @@ Result<MeasuredTable> readMerl(std::string_view bytes) {
       ++t.validBins;
   }
   if (t.validBins == 0) return makeError(ErrorCode::InvalidArgument, "the MERL table has no bin with data");
+  const MerlLobe lobe = fitMerlLobe(t);
+  t.lobeAlpha = lobe.alpha;
+  t.lobeWeight = lobe.weight;
   return t;
+}
+
+MerlLobe fitMerlLobe(const MeasuredTable& t) {
+  // The profile over theta_h at the smallest theta_d with data, phi_d averaged.
+  std::vector<double> profile(kMerlThetaHBins, -1.0);
+  for (int d = 0; d < kMerlThetaDBins && profile[0] < 0; ++d)
+    for (int h = 0; h < kMerlThetaHBins; ++h) {
+      double sum = 0;
+      int n = 0;
+      for (int p = 0; p < kMerlPhiDBins; ++p) {
+        const size_t bin = merlIndex(MerlBin{h, d, p});
+        if (t.valid(bin)) sum += t.rgb[3 * bin + 1], ++n;
+      }
+      profile[h] = n > 0 ? sum / n : -1.0;
+    }
+  MerlLobe lobe;
+  const double peak = profile[0];
+  double floor = peak;
+  for (double v : profile)
+    if (v >= 0) floor = std::min(floor, v);
+  // A flat profile (a diffuse table, or no data at the peak): mostly the cosine.
+  if (!(peak > 0) || !(peak > 1.01 * floor)) return MerlLobe{0.3f, 0.1f};
+  const double half = floor + 0.5 * (peak - floor);
+  double thetaHalf = kHalfPi * 0.5;
+  for (int h = 1; h < kMerlThetaHBins; ++h) {
+    if (profile[h] < 0 || profile[h] > half) continue;
+    // Between the centres of bins h - 1 and h, linearly in value.
+    const double a = merlBinCentre(MerlBin{h - 1, 0, 0}).thetaH, b = merlBinCentre(MerlBin{h, 0, 0}).thetaH;
+    const double fa = profile[h - 1] >= 0 ? profile[h - 1] : peak;
+    const double s = fa > profile[h] ? (fa - half) / (fa - profile[h]) : 1.0;
+    thetaHalf = a + std::clamp(s, 0.0, 1.0) * (b - a);
+    break;
+  }
+  // GGX's D = 1 / (pi cos^4 (a^2 + tan^2)^2) (times a^2) falls to half its peak where
+  // cos^2 (a^2 + tan^2) = sqrt(2) a^2, i.e. a^2 = tan^2 / (sqrt(2) - 1 + sqrt(2) tan^2).
+  const double q = std::sqrt(2.0), t2 = std::tan(thetaHalf) * std::tan(thetaHalf);
+  const double alpha = std::sqrt(t2 / ((q - 1) + q * t2));
+  lobe.alpha = static_cast<float>(std::clamp(alpha, 0.005, 1.0));
+  const double spec = 4 * kPi * double(lobe.alpha) * lobe.alpha * (peak - floor), diffuse = kPi * floor;
+  lobe.weight = static_cast<float>(std::clamp(spec / (spec + diffuse), 0.1, 0.9));
+  return lobe;
 }
 
 std::string writeMerl(const std::vector<double>& planar) {
@@ -212,7 +256,16 @@ std::string measuredBrdfText() {
          "#include \"terms/measured_merl.glsl\"\n"
          "\n"
          "vec3 BRDF(vec3 L, vec3 V, vec3 N, vec3 X, vec3 Y) { return measuredMERL(L, V, N, X, Y); }\n"
-         "::end shader\n";
+         "::end shader\n"
+         "::begin sample\n"
+         "// A GGX lobe fitted to the table, mixed with the cosine (terms/measured_merl.glsl).\n"
+         "float pdfBRDF(vec3 L, vec3 V, vec3 N, vec3 X, vec3 Y) { return pdfMeasuredMERL(L, V, N); }\n"
+         "\n"
+         "vec3 sampleBRDF(vec2 u, vec3 V, vec3 N, vec3 X, vec3 Y, out vec3 L, out float pdf)\n"
+         "{\n"
+         "    return sampleMeasuredMERL(u, V, N, X, Y, L, pdf);\n"
+         "}\n"
+         "::end sample\n";
 }
 
 Result<BrdfDefinition> measuredBrdf(const std::string& tableName) {
