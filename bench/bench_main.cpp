@@ -1,7 +1,8 @@
 // brdfa-bench: prints the figures docs/design.md section 9 asks for, as medians, in one run: the
 // renderer's (library level) and the service's (through the real server over loopback HTTP).
-//   brdfa-bench [--rounds N] [--source DIR] [--only renderer|scenes|sampling|split|http|class|auth] [--scene TEXT]
-//   brdfa-bench --only shaders --against DIR[,DIR...]   (shader work: DIR/shaders against --source's, interleaved)
+//   brdfa-bench [--rounds N] [--source DIR] [--only renderer|scenes|sampling|split|http|class|auth|measured] [--scene
+//   TEXT] brdfa-bench --only shaders --against DIR[,DIR...]   (shader work: DIR/shaders against --source's,
+//   interleaved)
 #include <cstdio>
 #include <cstdlib>
 #include <algorithm>
@@ -10,6 +11,7 @@
 
 #include "bench_auth.h"
 #include "bench_http.h"
+#include "bench_measured.h"
 #include "bench_renderer.h"
 #include "bench_sampling.h"
 #include "bench_scenes.h"
@@ -33,10 +35,10 @@ int main(int argc, char** argv) {
     else if (a == "--against" && i + 1 < argc)
       against = argv[++i];
     else {
-      std::fprintf(
-          stderr,
-          "usage: brdfa-bench [--rounds N] [--source DIR] [--only renderer|scenes|sampling|split|http|class|auth] "
-          "[--scene TEXT] [--only shaders --against DIR[,DIR...]]\n");
+      std::fprintf(stderr,
+                   "usage: brdfa-bench [--rounds N] [--source DIR] [--only "
+                   "renderer|scenes|sampling|split|http|class|auth|measured] "
+                   "[--scene TEXT] [--only shaders --against DIR[,DIR...]]\n");
       return 2;
     }
   }
@@ -58,6 +60,8 @@ int main(int argc, char** argv) {
   if (wanted("split") && (code = brdfa::bench::runSplitBench(source, rounds)) != 0) return code;
   if (wanted("http") && (code = brdfa::bench::runHttpBench(BRDFA_SERVER_BINARY, source)) != 0) return code;
   if (only == "class" && (code = brdfa::bench::runClassBench(BRDFA_SERVER_BINARY, source)) != 0) return code;
-  if (wanted("auth")) code = brdfa::bench::runAuthBench(BRDFA_SERVER_BINARY, source, std::max(5, rounds));
+  if (wanted("auth") && (code = brdfa::bench::runAuthBench(BRDFA_SERVER_BINARY, source, std::max(5, rounds))) != 0)
+    return code;
+  if (wanted("measured")) code = brdfa::bench::runMeasuredBench(BRDFA_SERVER_BINARY, source, rounds);
   return code;
 }

@@ -209,7 +209,7 @@ struct MemoryUsage {
   uint64_t budget = 0;         // RendererOptions::memoryBudgetBytes (0: none)
   uint64_t fixed = 0;          // the device process and its idle compile workers at start (times 1 + spareProcesses)
   uint64_t renderTargets = 0;  // every view's G-buffer, accumulators and outputs
-  uint64_t assets = 0;         // meshes, textures and environments on the device
+  uint64_t assets = 0;         // meshes, textures, environments and measured tables on the device
   uint64_t transfers = 0;      // uploads in flight to the device (decoded data, staging)
   uint64_t programs = 0;       // built pipelines (an estimate each) and cached SPIR-V
   uint64_t compiles = 0;       // what the GLSL compile workers may grow to, at their budget
@@ -483,7 +483,10 @@ class Renderer {
   // environment name, by kind), beside the built-ins. The file should have passed inspectAsset
   // for `kind`; it is read, decoded and uploaded when a scene first uses it, then kept while
   // any view uses it. InvalidArgument when `name` is empty or a built-in's name of that kind.
-  // Registering a name again replaces the file for later scenes. Thread-safe.
+  // Registering a name again replaces the file for later scenes. A measured table (kind
+  // Measured, named by BrdfDefinition::measuredTable) is read and uploaded at once instead, and
+  // kept: OverBudget when the memory budget cannot hold it (nothing is registered then), and
+  // the file's errors (brdfa/measured.h's readMerl) as they are. Thread-safe.
   virtual Result<void> registerAsset(const std::string& name, AssetKind kind, const std::string& path) = 0;
 
   // Built-in names, then registered ones (sorted), of each kind.

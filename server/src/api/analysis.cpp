@@ -68,9 +68,9 @@ Result<std::vector<Series>> readSeries(const json& body, Service& service, const
       auto name = s.find("brdf");
       if (name == s.end() || !name->is_string()) return bad(at + ".brdf", "must name a BRDF (or give \"source\")");
       series.brdfName = name->get<std::string>();
-      auto entry = service.brdfs.find(series.brdfName);
+      auto entry = service.readableBrdf(who, series.brdfName);
       // Someone else's BRDF is as unknown as one that does not exist.
-      if (!entry || !canReadBrdf(who, *entry))
+      if (!entry)
         return makeError(ErrorCode::NotFound, at + ".brdf: unknown BRDF '" + series.brdfName + "'", at + ".brdf");
       series.brdf = entry->definition;
     }

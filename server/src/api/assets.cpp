@@ -23,7 +23,9 @@ struct FormPart {
 // Reads the whole body (so the connection stays usable whatever the answer), keeping at most
 // `fileCap` bytes of each `file` part and kMaxFormFieldBytes of other parts. False when the body
 // is not valid multipart/form-data or exceeds the payload limit (res.status says which).
-bool readForm(const httplib::ContentReader& reader, uint64_t fileCap, std::vector<FormPart>& parts,
+// A `file` part's buffer is sized once for `bodyBytes` (the memory already held for the body):
+// grown by appends, a large file would be copied again at every doubling.
+bool readForm(const httplib::ContentReader& reader, uint64_t fileCap, uint64_t bodyBytes, std::vector<FormPart>& parts,
               size_t& extraParts) {
   return reader(
       [&](const httplib::MultipartFormData& header) {
@@ -32,6 +34,7 @@ bool readForm(const httplib::ContentReader& reader, uint64_t fileCap, std::vecto
           return true;
         }
         parts.push_back({header.name, header.filename, header.content_type, {}, 0});
+        if (header.name == "file") parts.back().content.reserve(std::min(fileCap, bodyBytes));
         return true;
       },
       [&](const char* data, size_t length) {
@@ -107,7 +110,7 @@ void uploadAsset(Service& service, const httplib::Request& req, httplib::Respons
   // One byte past the limit is enough to know a file is too large; its full size is counted.
   std::vector<FormPart> parts;
   size_t extraParts = 0;
-  if (!readForm(reader, service.config.maxUploadBytes + 1, parts, extraParts)) {
+  if (!readForm(reader, service.config.maxUploadBytes + 1, length, parts, extraParts)) {
     if (res.status == 413)
       return sendError(res, ErrorCode::PayloadTooLarge,
                        "the request body is larger than " + std::to_string(service.maxRequestBody()) +
@@ -158,7 +161,7 @@ void listAssets(Service& service, const httplib::Request& req, httplib::Response
   if (req.has_param("kind")) {
     AssetKind k;
     if (!assetKindFromName(req.get_param_value("kind"), k))
-      return sendError(res, ErrorCode::InvalidArgument, "kind must be mesh, texture or environment", "kind");
+      return sendError(res, ErrorCode::InvalidArgument, "kind must be mesh, texture, environment or measured", "kind");
     kind = k;
   }
   const Identity& who = requester(req);

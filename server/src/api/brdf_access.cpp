@@ -10,8 +10,8 @@ std::shared_ptr<const BrdfEntry> readableBrdfOr404(Service& service, const Ident
     sendError(res, ErrorCode::InvalidArgument, std::string("BRDF ") + kBrdfNameRule, "name");
     return nullptr;
   }
-  auto entry = service.brdfs.find(name);
-  if (!entry || !canReadBrdf(who, *entry)) {
+  auto entry = service.readableBrdf(who, name);
+  if (!entry) {
     sendError(res, ErrorCode::NotFound, "no BRDF named '" + name + "'", "name");
     return nullptr;
   }
@@ -24,6 +24,11 @@ bool mayWriteBrdfName(Service& service, const Identity& who, const std::string& 
     return false;
   }
   const std::string owner(brdfNameOwner(name));
+  // Measured uploads are BRDFs under their asset ids (merl_...): a saved file may not shadow one.
+  if (std::string_view(name).substr(owner.empty() ? 0 : owner.size() + 1).starts_with("merl_")) {
+    sendError(res, ErrorCode::InvalidArgument, "BRDF names starting with merl_ are measured uploads' ids", "name");
+    return false;
+  }
   if (owner == who.libraryOwner()) return true;
   // A name of a classmate's that one may not read answers as if it were free and unknown.
   if (!owner.empty() && !who.teacher()) {

@@ -77,8 +77,7 @@ void getBrdf(Service& service, const httplib::Request& req, httplib::Response& r
   std::string name = req.matches[1];
   if (!isValidQualifiedBrdfName(name))
     return sendError(res, ErrorCode::InvalidArgument, std::string("BRDF ") + kBrdfNameRule, "name");
-  if (auto entry = service.brdfs.find(name); entry && canReadBrdf(who, *entry))
-    return sendJson(res, brdfEntryToJson(*entry, true));
+  if (auto entry = service.readableBrdf(who, name)) return sendJson(res, brdfEntryToJson(*entry, true));
   if (auto broken = service.brdfs.findBroken(name); broken && canReadBrdf(who, *broken))
     return sendJson(res, brokenToJson(*broken, true));
   sendError(res, ErrorCode::NotFound, "no BRDF named '" + name + "'", "name");

@@ -82,7 +82,7 @@ void registerJobRoutes(httplib::Server& server, Service& service) {
         if (!n.is_string()) return sendError(res, ErrorCode::InvalidArgument, field + ": must be a string", field);
         std::string name = n.get<std::string>();
         if (!seen.insert(name).second) continue;  // duplicates are tested once
-        if (auto entry = service.brdfs.find(name); entry && canReadBrdf(who, *entry))
+        if (auto entry = service.readableBrdf(who, name))
           items.push_back(JobItem{name, entry->definition, {}});
         else if (auto broken = service.brdfs.findBroken(name); broken && canReadBrdf(who, *broken))
           items.push_back(JobItem{name, nullptr, std::move(broken->error)});

@@ -142,10 +142,7 @@ SceneResolver Service::resolver(const Identity& who, std::shared_ptr<const BrdfD
   if (assets) assets->refreshFromDisk();
   SceneResolver r;
   // Someone else's BRDF resolves exactly like one that does not exist.
-  r.findBrdf = [this, who](std::string_view name) -> std::shared_ptr<const BrdfEntry> {
-    auto entry = brdfs.find(name);
-    return entry && canReadBrdf(who, *entry) ? entry : nullptr;
-  };
+  r.findBrdf = [this, who](std::string_view name) { return readableBrdf(who, name); };
   r.inlineBrdf = std::move(inlineBrdf);
   auto visible = [&](std::vector<std::string> names) {
     if (assets)
@@ -156,6 +153,12 @@ SceneResolver Service::resolver(const Identity& who, std::shared_ptr<const BrdfD
   r.meshes = visible(renderer->meshNames());
   r.textures = visible(renderer->textureNames());
   return r;
+}
+
+std::shared_ptr<const BrdfEntry> Service::readableBrdf(const Identity& who, std::string_view name) {
+  if (auto entry = brdfs.find(name)) return canReadBrdf(who, *entry) ? entry : nullptr;
+  if (!assets || !assets->visible(name, who.user, who.teacher())) return nullptr;
+  return assets->measuredBrdf(name);
 }
 
 size_t Service::maxRequestBody() const {

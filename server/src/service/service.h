@@ -77,6 +77,9 @@ struct Service {
   // Name resolution for scene JSON of `who`: the BRDFs and uploads they may read;
   // `inlineBrdf` enables objects with "brdf": "inline".
   SceneResolver resolver(const Identity& who, std::shared_ptr<const BrdfDefinition> inlineBrdf = nullptr);
+  // The BRDF `name` as `who` may read it: a library file they may read, or a measured upload
+  // they may see (its asset id); null otherwise, exactly as for a name that does not exist.
+  std::shared_ptr<const BrdfEntry> readableBrdf(const Identity& who, std::string_view name);
 
   // A quota of `who` (config.quotas' field): 0 (no limit) for the teacher.
   template <class T>

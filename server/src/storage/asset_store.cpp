@@ -13,6 +13,7 @@
 #include <set>
 #include <sstream>
 
+#include "brdfa/measured.h"
 #include "util/atomic_file.h"
 #include "util/display_text.h"
 #include "util/render_slots.h"
@@ -29,7 +30,7 @@ constexpr size_t kMaxMetadataBytes = 64 * 1024;
 constexpr std::chrono::seconds kInspectSlotWait{30};
 // Limits for the environment folders' files (the system's, not a client's).
 constexpr uint64_t kMaxSystemAssetBytes = 1ull << 30;
-constexpr AssetKind kKinds[] = {AssetKind::Mesh, AssetKind::Texture, AssetKind::Environment};
+constexpr AssetKind kKinds[] = {AssetKind::Mesh, AssetKind::Texture, AssetKind::Environment, AssetKind::Measured};
 
 std::string lower(std::string_view s) {
   std::string out(s);
@@ -46,8 +47,9 @@ struct FormatInfo {
   const char* title;
 };
 constexpr FormatInfo kFormatInfo[] = {
-    {AssetFormat::Obj, "obj", "OBJ"},          {AssetFormat::Png, "png", "PNG"},     {AssetFormat::Jpeg, "jpg", "JPEG"},
-    {AssetFormat::Hdr, "hdr", "Radiance HDR"}, {AssetFormat::Exr, "exr", "OpenEXR"},
+    {AssetFormat::Obj, "obj", "OBJ"},     {AssetFormat::Png, "png", "PNG"},
+    {AssetFormat::Jpeg, "jpg", "JPEG"},   {AssetFormat::Hdr, "hdr", "Radiance HDR"},
+    {AssetFormat::Exr, "exr", "OpenEXR"}, {AssetFormat::Merl, "binary", "a MERL table"},
 };
 const char* storedExtension(AssetFormat format) { return kFormatInfo[static_cast<int>(format)].extension; }
 const char* formatTitle(AssetFormat format) { return kFormatInfo[static_cast<int>(format)].title; }
@@ -114,15 +116,19 @@ bool kindAccepts(AssetKind kind, AssetFormat format) {
   switch (kind) {
     case AssetKind::Mesh: return format == AssetFormat::Obj;
     case AssetKind::Texture: return format == AssetFormat::Png || format == AssetFormat::Jpeg;
-    case AssetKind::Environment: return format != AssetFormat::Obj;  // HDR, EXR, or a PNG/JPEG cross
+    case AssetKind::Environment:  // HDR, EXR, or a PNG/JPEG cross
+      return format != AssetFormat::Obj && format != AssetFormat::Merl;
+    case AssetKind::Measured: return format == AssetFormat::Merl;
   }
   return false;
 }
 
-// Without a `kind` field: OBJ -> mesh, HDR/EXR -> environment, PNG/JPEG -> texture.
+// Without a `kind` field: OBJ -> mesh, HDR/EXR -> environment, PNG/JPEG -> texture, MERL ->
+// measured.
 AssetKind defaultKind(AssetFormat format) {
   switch (format) {
     case AssetFormat::Obj: return AssetKind::Mesh;
+    case AssetFormat::Merl: return AssetKind::Measured;
     case AssetFormat::Hdr:
     case AssetFormat::Exr: return AssetKind::Environment;
     default: return AssetKind::Texture;
@@ -133,6 +139,7 @@ const char* idPrefix(AssetKind kind) {
   switch (kind) {
     case AssetKind::Texture: return "tex_";
     case AssetKind::Environment: return "env_";
+    case AssetKind::Measured: return "merl_";
     case AssetKind::Mesh: break;
   }
   return "mesh_";
@@ -192,7 +199,20 @@ std::optional<AssetRecord> recordFromMetadata(const json& j, const std::string& 
   r.name = sanitizeUploadFileName(str("name").value_or(""));
   r.created = str("created").value_or("");
   r.owner = str("owner").value_or("");  // absent in uploads of the single-user layout: the course's
+  if (r.kind == AssetKind::Measured) (void)count("bins", r.measuredBins);
   return r;
+}
+
+// The BRDF a measured upload is: brdfa/measured.h's file bound to its table, the uploader's.
+std::shared_ptr<const BrdfEntry> measuredEntry(const AssetRecord& r) {
+  auto entry = std::make_shared<BrdfEntry>();
+  entry->name = r.id;
+  entry->source = measuredBrdfText();
+  Result<BrdfDefinition> def = measuredBrdf(r.id);
+  // The text is the renderer's own: it always parses (tests/unit/test_measured_render.cpp).
+  if (def) entry->definition = std::make_shared<const BrdfDefinition>(std::move(def.value()));
+  entry->owner = r.owner;
+  return entry->definition ? entry : nullptr;
 }
 
 }  // namespace
@@ -221,6 +241,7 @@ const char* assetRejectionName(AssetRejection reason) {
     case AssetRejection::Busy: return "busy";
     case AssetRejection::StorageError: return "storage_error";
     case AssetRejection::QuotaExceeded: return "quota_exceeded";
+    case AssetRejection::MemoryBudget: return "memory_budget";
   }
   return "invalid";
 }
@@ -240,6 +261,7 @@ json assetToJson(const AssetRecord& r) {
   j["bytes"] = r.bytes;
   j["width"] = r.width;
   j["height"] = r.height;
+  if (r.kind == AssetKind::Measured) j["bins"] = r.measuredBins;
   if (r.source == AssetSource::Upload) {
     j["vertices"] = r.vertices;
     j["triangles"] = r.triangles;
@@ -314,6 +336,7 @@ std::string AssetStore::loadOne(const std::string& id) {
   std::lock_guard lock(mutex_);
   if (uploads_.count(id)) return "";  // picked up twice: counted once
   storedBytes_ += record->bytes;
+  if (record->kind == AssetKind::Measured) measuredBrdfs_[id] = measuredEntry(*record);
   uploads_[id] = std::move(*record);
   return "";
 }
@@ -444,13 +467,14 @@ Result<UploadClaims> checkUploadClaims(const AssetUpload& up, uint64_t maxBytes,
     AssetKind k;
     if (!assetKindFromName(up.kind, k))
       return refuseUpload(rejection, AssetRejection::BadKind,
-                          "kind must be mesh, texture or environment, got '" + up.kind.substr(0, 64) + "'", "kind");
+                          "kind must be mesh, texture, environment or measured, got '" + up.kind.substr(0, 64) + "'",
+                          "kind");
     requested = k;
   }
   std::optional<AssetFormat> format = sniffAssetFormat(up.bytes);
   if (!format)
     return refuseUpload(rejection, AssetRejection::UnknownFormat,
-                        "the file's content is none of OBJ, PNG, JPEG, Radiance HDR or OpenEXR");
+                        "the file's content is none of OBJ, PNG, JPEG, Radiance HDR, OpenEXR or a MERL table");
   const AssetKind kind = requested.value_or(defaultKind(*format));
   if (!kindAccepts(kind, *format))
     return refuseUpload(rejection, AssetRejection::Mislabelled,
@@ -534,6 +558,7 @@ Result<void> AssetStore::storeReserved(const AssetRecord& rec, const AssetUpload
   }
   storedBytes_ += rec.bytes;
   uploads_[rec.id] = rec;
+  if (rec.kind == AssetKind::Measured) measuredBrdfs_[rec.id] = measuredEntry(rec);
   return {};
 }
 
@@ -577,6 +602,7 @@ Result<AssetRecord> AssetStore::add(const AssetUpload& up, AssetRejection& rejec
   rec.triangles = info->triangles;
   rec.width = info->width;
   rec.height = info->height;
+  rec.measuredBins = info->measuredBins;
   rec.created = nowIso8601();
   rec.owner = owner.user;
   refreshFromDisk();  // the check took a while: look at the folder again before reserving
@@ -591,6 +617,11 @@ Result<AssetRecord> AssetStore::add(const AssetUpload& up, AssetRejection& rejec
     reservedBy_[owner.user].second += up.size;
   }
   if (Result<void> stored = storeReserved(rec, up, owner); !stored) {
+    // A measured table is loaded when it is registered: a budget that cannot hold it refuses it.
+    if (stored.error().code == ErrorCode::OverBudget) {
+      rejection = AssetRejection::MemoryBudget;
+      return stored.takeError();
+    }
     rejection = AssetRejection::StorageError;
     return makeError(ErrorCode::Internal, "could not store the upload: " + stored.error().message);
   }
@@ -644,9 +675,11 @@ std::vector<AssetRecord> AssetStore::list(std::optional<AssetKind> kind) const {
   std::lock_guard lock(mutex_);
   for (AssetKind k : kKinds) {
     if (kind && *kind != k) continue;
-    const std::vector<std::string> names = k == AssetKind::Mesh      ? renderer_->meshNames()
-                                           : k == AssetKind::Texture ? renderer_->textureNames()
-                                                                     : renderer_->environmentNames();
+    // Measured tables have no built-ins: every one is an upload.
+    const std::vector<std::string> names = k == AssetKind::Mesh          ? renderer_->meshNames()
+                                           : k == AssetKind::Texture     ? renderer_->textureNames()
+                                           : k == AssetKind::Environment ? renderer_->environmentNames()
+                                                                         : std::vector<std::string>{};
     // Built-ins: what the renderer knows that this store did not register.
     for (const std::string& n : names) {
       if (uploads_.count(n) || blender_.count(n)) continue;
@@ -674,6 +707,7 @@ Result<bool> AssetStore::remove(const std::string& id) {
     auto it = uploads_.find(id);
     if (it == uploads_.end()) return false;
     record = std::move(it->second);
+    measuredBrdfs_.erase(id);
     uploads_.erase(it);
     storedBytes_ -= record.bytes;
     removed_.insert(id);
@@ -701,6 +735,14 @@ std::optional<AssetRecord> AssetStore::find(const std::string& id) const {
   for (const AssetRecord& r : list())
     if (r.id == id) return r;
   return std::nullopt;
+}
+
+std::shared_ptr<const BrdfEntry> AssetStore::measuredBrdf(std::string_view id) const {
+  if (!id.starts_with("merl_")) return nullptr;  // every other name: no folder look-up
+  refreshFromDisk();
+  std::lock_guard lock(mutex_);
+  auto it = measuredBrdfs_.find(id);
+  return it == measuredBrdfs_.end() ? nullptr : it->second;
 }
 
 }  // namespace brdfa::server

@@ -22,6 +22,7 @@
 #include "brdfa/assets.h"
 #include "brdfa/renderer.h"
 #include "brdfa/result.h"
+#include "storage/brdf_library.h"
 
 namespace brdfa::server {
 
@@ -49,13 +50,14 @@ enum class AssetRejection {
   Empty,          // no bytes
   TooLarge,       // over the byte limit (sizes in the message)
   UnknownFormat,  // not OBJ, PNG, JPEG, HDR or EXR by content
-  BadKind,        // `kind` is not mesh, texture or environment
+  BadKind,        // `kind` is not mesh, texture, environment or measured
   Mislabelled,    // kind, file-name extension or Content-Type contradicts the content
   Invalid,        // inspectAsset refused it: truncated, corrupt, limits exceeded, ...
   StorageFull,    // --max-assets or --max-assets-bytes reached
   Busy,           // no inspection slot within the wait (or shutting down)
   StorageError,   // writing the files failed
   QuotaExceeded,  // the uploader's own count or bytes (AssetOwner) would be exceeded
+  MemoryBudget,   // a measured table the renderer's memory budget cannot hold (loaded on upload)
 };
 
 // Who uploads, and what they may keep; 0: no limit.
@@ -88,8 +90,9 @@ struct AssetRecord {
   std::string name;                   // uploads: the sanitized original file name
   uint64_t bytes = 0, vertices = 0, triangles = 0;
   int width = 0, height = 0;
-  std::string created;  // uploads: ISO 8601 UTC
-  std::string owner;    // uploads: the uploader; "" for the course's and others
+  uint64_t measuredBins = 0;  // measured tables: bins with data
+  std::string created;        // uploads: ISO 8601 UTC
+  std::string owner;          // uploads: the uploader; "" for the course's and others
 };
 
 class AssetStore {
@@ -122,6 +125,10 @@ class AssetStore {
   // (refreshFromDisk).
   std::vector<AssetRecord> list(std::optional<AssetKind> kind = std::nullopt) const;
   std::optional<AssetRecord> find(const std::string& id) const;
+  // A measured upload as the BRDF scenes, analyses and checks name by its id (brdfa/measured.h's
+  // measuredBrdf, owned like the upload); null for any other id. Visibility is the caller's
+  // (visible()).
+  std::shared_ptr<const BrdfEntry> measuredBrdf(std::string_view id) const;
 
   // Registers the uploads that other servers sharing the folder stored since the last look
   // (their metadata file is the acknowledgment: written after the data file). Cheap when the
@@ -155,8 +162,9 @@ class AssetStore {
   RenderSlots& slots_;
 
   mutable std::mutex mutex_;
-  std::map<std::string, AssetRecord> uploads_;  // by id
-  std::map<std::string, AssetRecord> blender_;  // by name
+  std::map<std::string, AssetRecord> uploads_;                                          // by id
+  std::map<std::string, AssetRecord> blender_;                                          // by name
+  std::map<std::string, std::shared_ptr<const BrdfEntry>, std::less<>> measuredBrdfs_;  // by measured upload id
   std::set<std::string> writing_;               // ids this server is storing now (not another's to pick up)
   std::set<std::string, std::less<>> removed_;  // uploads removed since start (still registered)
   mutable std::mutex refreshMutex_;             // order: refreshMutex_ before mutex_
