@@ -14,7 +14,7 @@ set -eu
 BUILD_PACKAGES="build-essential cmake pkg-config \
 libvulkan-dev glslang-dev glslang-tools \
 libglm-dev libtinyobjloader-dev libcpp-httplib-dev libssl-dev libbrotli-dev zlib1g-dev \
-nlohmann-json3-dev libstb-dev libtinyexr-dev libopenexr-dev libdeflate-dev \
+nlohmann-json3-dev libstb-dev libtinyexr-dev libopenexr-dev libdeflate-dev libnlopt-dev \
 nodejs npm"
 # Running on this machine (lavapipe) and testing (GoogleTest, the browser tests' Chromium,
 # clang-format for the layout check).
