@@ -1,11 +1,13 @@
-// Jobs over REST: POST /api/jobs/validate (batch tests) and /api/jobs/convergence (sampling
-// strategies at equal time) queue, GET /api/jobs/{id} reports, DELETE /api/jobs/{id} cancels.
+// Jobs over REST: POST /api/jobs/validate (batch tests), /api/jobs/convergence (sampling
+// strategies at equal time) and /api/jobs/fit (a model's parameters fitted to a target) queue,
+// GET /api/jobs/{id} reports, DELETE /api/jobs/{id} cancels.
 #include <algorithm>
 #include <set>
 
 #include "api/routes.h"
 #include "http/http_errors.h"
 #include "jobs/convergence_job.h"
+#include "jobs/fit_job.h"
 
 namespace brdfa::server {
 
@@ -35,6 +37,43 @@ bool jobVisible(Service& service, const httplib::Request& req, httplib::Response
   if (owner && canRead(requester(req), *owner)) return true;
   sendError(res, ErrorCode::NotFound, "no job '" + id + "'", "id");
   return false;
+}
+
+// Queues a one-piece job: its request with "id" and "kind" added, or null once a refusal was
+// answered.
+nlohmann::json submitOnePiece(Service& service, httplib::Response& res, const Identity& who, JobKind kind,
+                              nlohmann::json request, JobRunner run) {
+  const JobOwner owner = jobOwner(service, who);
+  JobSubmitted submitted = service.jobs->submitRunner(kind, request, std::move(run), owner);
+  if (!submitted.id) {
+    sendJobRefusal(res, submitted, owner,
+                   "at most " + std::to_string(kMaxOpenRunnerJobs) +
+                       " convergence and fit jobs wait or run at once (and " + std::to_string(kMaxJobs) +
+                       " jobs are kept); try later or cancel one");
+    return nullptr;
+  }
+  request["id"] = *submitted.id;
+  request["kind"] = jobKindName(kind);
+  return request;
+}
+
+// POST /api/jobs/fit: parses the request as its requester may name BRDFs and queues the fit.
+void postFitJob(Service& service, const httplib::Request& req, httplib::Response& res) {
+  if (refuseWhileDraining(service, res)) return;
+  auto body = readJsonBody(req, res);
+  if (!body) return;
+  const Identity& who = requester(req);
+  FitLookup lookup{[&](const std::string& name) { return service.readableBrdf(who, name); },
+                   [&](const std::string& id) { return service.assets->storedFile(id); }};
+  Result<FitJobSpec> spec = parseFitJob(*body, lookup);
+  if (!spec) return sendError(res, spec.error());
+  nlohmann::json request = fitJobRequestJson(spec.value());
+  std::shared_ptr<Renderer> renderer = service.renderer;
+  auto run = [renderer, spec = std::move(spec.value())](JobContext& context) {
+    return runFitJob(*renderer, spec, context);
+  };
+  request = submitOnePiece(service, res, who, JobKind::Fit, std::move(request), std::move(run));
+  if (!request.is_null()) sendJson(res, request, 202);
 }
 
 }  // namespace
@@ -122,18 +161,14 @@ void registerJobRoutes(httplib::Server& server, Service& service) {
     auto run = [renderer, spec = std::move(spec.value())](JobContext& context) {
       return runConvergenceJob(*renderer, spec, context);
     };
-    const JobOwner owner = jobOwner(service, who);
-    JobSubmitted submitted = service.jobs->submitRunner(JobKind::Convergence, request, std::move(run), owner);
-    if (!submitted.id)
-      return sendJobRefusal(res, submitted, owner,
-                            "at most " + std::to_string(kMaxOpenRunnerJobs) +
-                                " convergence jobs wait or run at once (and " + std::to_string(kMaxJobs) +
-                                " jobs are kept); try later or cancel one");
+    request = submitOnePiece(service, res, who, JobKind::Convergence, std::move(request), std::move(run));
+    if (request.is_null()) return;
     request.erase("scene");
-    request["id"] = *submitted.id;
-    request["kind"] = jobKindName(JobKind::Convergence);
     sendJson(res, request, 202);
   });
+
+  server.Post("/api/jobs/fit",
+              [&service](const httplib::Request& req, httplib::Response& res) { postFitJob(service, req, res); });
 
   server.Get("/api/jobs/([^/]+)", [&service](const httplib::Request& req, httplib::Response& res) {
     std::string id = req.matches[1];

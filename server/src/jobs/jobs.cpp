@@ -46,13 +46,24 @@ class JobManager::Context : public JobContext {
     std::lock_guard lock(m_.mutex_);
     job_.progress = std::clamp(fraction, 0.0, 1.0);
   }
+  void setPartial(json partial) override {
+    std::lock_guard lock(m_.mutex_);
+    job_.partial = std::move(partial);
+  }
 
  private:
   JobManager& m_;
   Job& job_;
 };
 
-const char* jobKindName(JobKind kind) { return kind == JobKind::Convergence ? "convergence" : "validate"; }
+const char* jobKindName(JobKind kind) {
+  switch (kind) {
+    case JobKind::Convergence: return "convergence";
+    case JobKind::Fit: return "fit";
+    case JobKind::Validate: break;
+  }
+  return "validate";
+}
 
 JobManager::JobManager(std::shared_ptr<Renderer> renderer, int workers, std::string idPrefix)
     : renderer_(std::move(renderer)), idPrefix_(std::move(idPrefix)) {
@@ -172,6 +183,7 @@ void JobManager::runnerLoop() {
     std::lock_guard lock(mutex_);
     job->running = false;
     job->ended = true;
+    job->partial.reset();
     if (job->cancelFlag) {
       job->cancelled = true;
     } else if (result) {
@@ -218,6 +230,7 @@ std::optional<json> JobManager::describe(const std::string& id) const {
                {"progress", job->progress},
                {"request", job->request}};
       if (job->result) out["result"] = *job->result;
+      if (job->partial && !job->ended && !job->cancelled) out["partial"] = *job->partial;
       if (job->error) {
         out["error"] = {{"error", errorCodeName(job->error->code)}, {"message", job->error->message}};
         if (!job->error->field.empty()) out["error"]["field"] = job->error->field;

@@ -43,6 +43,8 @@ class JobContext {
   // should return soon (its result is then dropped).
   virtual bool cancelled() const = 0;
   virtual void setProgress(double fraction) = 0;  // 0..1, shown by describe()
+  // What the job has so far (a loss curve), shown by describe() as "partial" until it ends.
+  virtual void setPartial(nlohmann::json partial) = 0;
 };
 // The job's work: its result JSON, or an error (state "failed").
 using JobRunner = std::function<Result<nlohmann::json>(JobContext&)>;
@@ -60,9 +62,9 @@ struct JobSubmitted {
   size_t ownerOpen = 0;    // with quotaFull: how many
 };
 
-// What a job does: a batch test of BRDFs, or a convergence comparison (one-piece).
-enum class JobKind { Validate, Convergence };
-const char* jobKindName(JobKind kind);  // "validate", "convergence": the job's "kind"
+// What a job does: a batch test of BRDFs, or a one-piece job: a convergence comparison, a fit.
+enum class JobKind { Validate, Convergence, Fit };
+const char* jobKindName(JobKind kind);  // "validate", "convergence", "fit": the job's "kind"
 
 class JobManager {
  public:
@@ -82,8 +84,8 @@ class JobManager {
 
   // Batch tests: {"id", "kind": "validate", "state", "progress", "total", "finished",
   // "results": [...]}. One-piece jobs: {"id", "kind", "state", "progress", "request", and
-  // "result" when done or "error" when failed}. States: queued, running, done, failed (one-piece
-  // only), cancelled. nullopt for unknown ids.
+  // "result" when done, "error" when failed, "partial" while running once the job set one}. States: queued, running,
+  // done, failed (one-piece only), cancelled. nullopt for unknown ids.
   std::optional<nlohmann::json> describe(const std::string& id) const;
 
   // Cancels a job: queued work is dropped, a running one-piece job is told to stop (it returns
@@ -114,6 +116,7 @@ class JobManager {
     bool running = false;
     bool ended = false;
     std::optional<nlohmann::json> result;
+    std::optional<nlohmann::json> partial;
     std::optional<Error> error;
     bool isRunner() const { return static_cast<bool>(runner); }
     bool over() const;  // nothing of it runs or waits any more

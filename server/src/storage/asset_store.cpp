@@ -737,6 +737,13 @@ std::optional<AssetRecord> AssetStore::find(const std::string& id) const {
   return std::nullopt;
 }
 
+std::optional<std::string> AssetStore::storedFile(const std::string& id) const {
+  std::lock_guard lock(mutex_);
+  auto it = uploads_.find(id);
+  if (it == uploads_.end() || removed_.count(id) || !it->second.format) return std::nullopt;
+  return (fs::path(dir_) / (id + "." + storedExtension(*it->second.format))).string();
+}
+
 std::shared_ptr<const BrdfEntry> AssetStore::measuredBrdf(std::string_view id) const {
   if (!id.starts_with("merl_")) return nullptr;  // every other name: no folder look-up
   refreshFromDisk();

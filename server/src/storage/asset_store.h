@@ -129,6 +129,9 @@ class AssetStore {
   // measuredBrdf, owned like the upload); null for any other id. Visibility is the caller's
   // (visible()).
   std::shared_ptr<const BrdfEntry> measuredBrdf(std::string_view id) const;
+  // The stored data file of upload `id` (its bytes as validated on upload); nullopt for any
+  // other id and for removed uploads.
+  std::optional<std::string> storedFile(const std::string& id) const;
 
   // Registers the uploads that other servers sharing the folder stored since the last look
   // (their metadata file is the acknowledgment: written after the data file). Cheap when the

@@ -1,6 +1,6 @@
-// The few cryptographic primitives identities need, from OpenSSL's libcrypto: random secrets,
-// their SHA-256 for storage, and a comparison whose time does not depend on where two secrets
-// differ.
+// The few primitives of OpenSSL's libcrypto the server uses: for identities random secrets,
+// their SHA-256 for storage and a comparison whose time does not depend on where two secrets
+// differ; base64 for data URLs.
 #pragma once
 
 #include <string>
@@ -20,5 +20,8 @@ std::string sha256Hex(std::string_view text);
 
 // True when a and b are equal; for equal lengths the time does not depend on their content.
 bool constantTimeEqual(std::string_view a, std::string_view b);
+
+// Standard base64 (RFC 4648, with padding) of `bytes`.
+std::string base64Encode(std::string_view bytes);
 
 }  // namespace brdfa::server
