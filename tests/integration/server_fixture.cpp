@@ -62,6 +62,38 @@ void ServerTest::TearDown() {
 }
 
 httplib::Result ServerTest::get(const std::string& path) { return server_->client()->Get(path); }
+
+void ServerTest::expectError(const httplib::Result& r, int status, const std::string& field) {
+  ASSERT_TRUE(r);
+  EXPECT_EQ(r->status, status) << r->body;
+  nlohmann::json body = bodyJson(r);
+  ASSERT_TRUE(body.is_object()) << r->body;
+  EXPECT_TRUE(body["error"].is_string()) << r->body;
+  EXPECT_TRUE(body["message"].is_string()) << r->body;
+  EXPECT_EQ(body.value("field", ""), field) << r->body;
+}
+
+nlohmann::json ServerTest::waitForJob(const std::string& id, std::chrono::seconds timeout) {
+  using Clock = std::chrono::steady_clock;
+  double lastProgress = 0;
+  nlohmann::json job;
+  for (auto deadline = Clock::now() + timeout; Clock::now() < deadline;) {
+    auto r = get("/api/jobs/" + id);
+    EXPECT_TRUE(r && r->status == 200) << id << ": " << (r ? r->body : "no answer");
+    job = r ? bodyJson(r) : nlohmann::json();
+    if (!job.is_object()) return job;
+    double progress = job.value("progress", -1.0);
+    EXPECT_GE(progress, 0.0);
+    EXPECT_LE(progress, 1.0);
+    EXPECT_GE(progress, lastProgress - 1e-9) << "progress never goes back";
+    lastProgress = progress;
+    std::string state = job.value("state", "");
+    if (state != "queued" && state != "running") return job;
+    std::this_thread::sleep_for(std::chrono::milliseconds(200));
+  }
+  ADD_FAILURE() << "job " << id << " did not finish in time: " << job.dump();
+  return job;
+}
 httplib::Result ServerTest::post(const std::string& path, const std::string& body, const std::string& type) {
   return server_->client()->Post(path, body, type);
 }

@@ -56,6 +56,11 @@ class ServerTest : public ::testing::Test {
   static httplib::Result del(const std::string& path);
   // POST /api/sessions with `scene`; the new session's id ("" after a failed expectation).
   static std::string createSession(const nlohmann::json& scene);
+  // Polls GET /api/jobs/{id} until it is no longer queued or running, expecting progress in
+  // [0, 1] that never goes back; the last answer (a failed expectation on timeout).
+  static nlohmann::json waitForJob(const std::string& id, std::chrono::seconds timeout);
+  // Expects an error answer: `status` with a JSON {error, message} body naming `field`.
+  static void expectError(const httplib::Result& r, int status, const std::string& field);
 
   static std::unique_ptr<ServerProcess> server_;
   static std::string startError_;

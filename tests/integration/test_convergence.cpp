@@ -42,36 +42,6 @@ class Convergence : public ServerTest {
     EXPECT_EQ(r->status, 200) << path << ": " << r->body;
     return bodyJson(r);
   }
-
-  static void expectError(const httplib::Result& r, int status, const std::string& field) {
-    ASSERT_TRUE(r);
-    EXPECT_EQ(r->status, status) << r->body;
-    json body = bodyJson(r);
-    ASSERT_TRUE(body.is_object()) << r->body;
-    EXPECT_TRUE(body["error"].is_string()) << r->body;
-    EXPECT_TRUE(body["message"].is_string()) << r->body;
-    EXPECT_EQ(body.value("field", ""), field) << r->body;
-  }
-
-  // Polls GET /api/jobs/{id} until it is no longer queued or running; checks progress on the way.
-  static json waitForJob(const std::string& id, std::chrono::seconds timeout) {
-    double lastProgress = 0;
-    json job;
-    for (auto deadline = Clock::now() + timeout; Clock::now() < deadline;) {
-      job = getJson("/api/jobs/" + id);
-      if (!job.is_object()) return job;
-      double progress = job.value("progress", -1.0);
-      EXPECT_GE(progress, 0.0);
-      EXPECT_LE(progress, 1.0);
-      EXPECT_GE(progress, lastProgress - 1e-9) << "progress never goes back";
-      lastProgress = progress;
-      std::string state = job.value("state", "");
-      if (state != "queued" && state != "running") return job;
-      std::this_thread::sleep_for(200ms);
-    }
-    ADD_FAILURE() << "job " << id << " did not finish in time: " << job.dump();
-    return job;
-  }
 };
 
 TEST_F(Convergence, SceneCarriesSamplingAndTargetError) {
