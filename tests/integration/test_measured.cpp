@@ -93,6 +93,34 @@ class Measured : public ::testing::Test {
     return r ? bodyJson(r) : json();
   }
 
+  // Runs the first sh block after `heading` of docs/api.md against this server, from a folder
+  // holding examples/make_merl.py; what it printed (a failed assertion when it fails).
+  std::string runDocsExample(const std::string& heading) {
+    const std::string api = readRepoFile("docs/api.md");
+    const size_t section = api.find("\n" + heading + "\n");
+    EXPECT_NE(section, std::string::npos) << heading;
+    if (section == std::string::npos) return {};
+    const size_t begin = api.find("```sh\n", section), end = api.find("```\n", begin + 6);
+    EXPECT_NE(end, std::string::npos);
+    if (end == std::string::npos) return {};
+    std::string script = api.substr(begin + 6, end - begin - 6);
+    for (size_t at; (at = script.find("127.0.0.1:8080")) != std::string::npos;)
+      script.replace(at, 14, "127.0.0.1:" + std::to_string(server_.port()));
+    std::error_code ec;
+    fs::create_directories(root_ + "/examples");
+    fs::copy_file(std::string(BRDFA_SOURCE_DIR) + "/examples/make_merl.py", root_ + "/examples/make_merl.py",
+                  fs::copy_options::overwrite_existing, ec);
+    std::ofstream(root_ + "/example.sh") << "set -e\ncd " << root_ << "\n" << script;
+    FILE* out = ::popen(("bash " + root_ + "/example.sh").c_str(), "r");
+    EXPECT_NE(out, nullptr);
+    if (!out) return {};
+    std::string printed;
+    char buf[4096];
+    for (size_t n; (n = std::fread(buf, 1, sizeof buf, out)) > 0;) printed.append(buf, n);
+    EXPECT_EQ(::pclose(out), 0) << printed;
+    return printed;
+  }
+
   std::string root_;
   ServerProcess server_;
 };
@@ -282,29 +310,27 @@ TEST_F(Measured, ABudgetThatCannotHoldATableAnswers507) {
 TEST_F(Measured, TheDocsExampleRunsAsWritten) {
   if (std::system("command -v python3 >/dev/null") != 0) GTEST_SKIP() << "python3 is not installed";
   start();
-  const std::string api = readRepoFile("docs/api.md");
-  const size_t section = api.find("### Measured BRDFs");
-  ASSERT_NE(section, std::string::npos);
-  const size_t begin = api.find("```sh\n", section), end = api.find("```\n", begin + 6);
-  ASSERT_NE(end, std::string::npos);
-  std::string script = api.substr(begin + 6, end - begin - 6);
-  for (size_t at; (at = script.find("127.0.0.1:8080")) != std::string::npos;)
-    script.replace(at, 14, "127.0.0.1:" + std::to_string(server_.port()));
-  fs::create_directories(root_ + "/examples");
-  fs::copy_file(std::string(BRDFA_SOURCE_DIR) + "/examples/make_merl.py", root_ + "/examples/make_merl.py");
-  std::ofstream(root_ + "/example.sh") << "set -e\ncd " << root_ << "\n" << script;
-  FILE* out = ::popen(("bash " + root_ + "/example.sh").c_str(), "r");
-  ASSERT_NE(out, nullptr);
-  std::string printed;
-  char buf[4096];
-  for (size_t n; (n = std::fread(buf, 1, sizeof buf, out)) > 0;) printed.append(buf, n);
-  ASSERT_EQ(::pclose(out), 0) << printed;
+  const std::string printed = runDocsExample("### Measured BRDFs");
   // The PATCH's scene names the table; the polar plot has its series and GGX's.
   EXPECT_NE(printed.find("\"brdf\":\"merl_"), std::string::npos) << printed.substr(0, 2000);
   EXPECT_NE(printed.find("\"kind\":\"polar\""), std::string::npos) << printed.substr(0, 2000);
   const json assets = getJson("/api/assets?kind=measured");
   ASSERT_EQ(assets.size(), 1u);
   EXPECT_EQ(assets[0].value("bins", 0), 1096216) << "the count docs/api.md quotes";
+}
+
+TEST_F(Measured, TheFitExampleRunsAsWritten) {
+  if (std::system("command -v python3 >/dev/null") != 0) GTEST_SKIP() << "python3 is not installed";
+  start();
+  const std::string printed = runDocsExample("## Fit jobs");
+  // The last line: the fitted parameters (python's dict) and the final loss.
+  const size_t roughness = printed.find("'roughness': ");
+  ASSERT_NE(roughness, std::string::npos) << printed.substr(0, 2000);
+  EXPECT_NEAR(std::stod(printed.substr(roughness + 13)), 0.2, 0.002) << printed;
+  const size_t f0 = printed.find("'F0': [");
+  ASSERT_NE(f0, std::string::npos) << printed;
+  EXPECT_NEAR(std::stod(printed.substr(f0 + 7)), 0.8, 0.008) << printed;
+  EXPECT_LT(std::stod(printed.substr(printed.rfind(' ') + 1)), 1e-8) << printed;
 }
 
 }  // namespace
